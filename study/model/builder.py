@@ -1,0 +1,209 @@
+"""Body-level description of a planar mechanism.
+
+A description lists coordinates, rigid bodies (centre-of-mass position and angle as sympy
+expressions of q, with mass and centroidal inertia), named points, holonomic constraints,
+gravity, springs (potentials), applied loads and sliding contacts. Parameters are sympy symbols,
+so one derivation serves every variant; numbers are bound when the description is compiled.
+
+Example
+-------
+>>> b = MechanismBuilder("pendulum", ["x", "y"], {"L": 1.0, "m": 2.0, "g": 9.81})
+>>> x, y = b.q
+>>> bob = b.body("bob", x, y, 0, mass=b.p.m, inertia=b.p.m * 0)   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any, Callable, Mapping, Sequence
+
+import sympy as sp
+
+Expr = sp.Expr
+
+
+@dataclass(frozen=True)
+class Body:
+    name: str
+    x: Expr
+    y: Expr
+    angle: Expr
+    mass: Expr
+    inertia: Expr
+
+
+@dataclass(frozen=True)
+class Point:
+    name: str
+    x: Expr
+    y: Expr
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """A force at a point whose value comes from a numeric law.
+
+    ``law(t, r, v, mode) -> (fx, fy)`` gets the point's position r and velocity v (shape (2,)).
+    ``indicators(t, r, v) -> sequence`` returns switching functions if the law is discontinuous;
+    between their zero crossings the law must be smooth for a frozen ``mode`` (tuple of +-1).
+    """
+
+    name: str
+    point: Point
+    law: Callable[..., Sequence[float]]
+    indicators: Callable[..., Sequence[float]] | None = None
+    indicator_names: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class TorqueLoad:
+    """A torque on a body; ``law(t, angle, rate) -> tau`` (counter-clockwise positive)."""
+
+    name: str
+    body: Body
+    law: Callable[[float, float, float], float]
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A sliding contact: the point's normal gap n.r - offset = 0 is a constraint row."""
+
+    name: str
+    point: Point
+    normal: tuple[Expr, Expr]
+    tangent: tuple[Expr, Expr]
+    mu_static: Expr
+    mu_kinetic: Expr
+    resistance: Expr
+
+
+class DescriptionError(ValueError):
+    """The mechanism description is inconsistent; the message lists every problem."""
+
+
+class MechanismBuilder:
+    """Collect a planar mechanism's description, then :meth:`compile` it.
+
+    Parameters
+    ----------
+    name : str
+    coordinates : sequence of str
+        Names of the m redundant coordinates; ``builder.q`` and ``builder.qd`` hold their symbols.
+    parameters : mapping of str to float
+        Numeric values; ``builder.p.<name>`` is the matching sympy symbol.
+    """
+
+    def __init__(self, name: str, coordinates: Sequence[str], parameters: Mapping[str, float]):
+        if not coordinates:
+            raise DescriptionError(f"mechanism {name!r}: at least one coordinate is needed")
+        if len(set(coordinates)) != len(coordinates):
+            raise DescriptionError(f"mechanism {name!r}: duplicate coordinate names in {list(coordinates)}")
+        self.name = name
+        self.coordinate_names = tuple(coordinates)
+        self.q = sp.Matrix(sp.symbols([f"q_{c}" for c in coordinates], real=True))
+        self.qd = sp.Matrix(sp.symbols([f"qd_{c}" for c in coordinates], real=True))
+        self.values = dict(parameters)
+        self.p = SimpleNamespace(**{k: sp.Symbol(f"p_{k}", real=True) for k in parameters})
+        self.bodies: list[Body] = []
+        self.points: list[Point] = []
+        self.constraints: list[tuple[str, Expr]] = []
+        self.potentials: list[tuple[str, Expr]] = []
+        self.point_loads: list[PointLoad] = []
+        self.torque_loads: list[TorqueLoad] = []
+        self.contacts: list[Contact] = []
+        self.gravity_g: Expr | None = None
+
+    # --- description -------------------------------------------------------------------------
+    def body(self, name: str, x: Any, y: Any, angle: Any, mass: Any, inertia: Any) -> Body:
+        """A rigid body: centre of mass (x, y), angle, mass and centroidal inertia."""
+        b = Body(name, *(sp.sympify(v) for v in (x, y, angle, mass, inertia)))
+        self.bodies.append(b)
+        return b
+
+    def point(self, name: str, x: Any, y: Any) -> Point:
+        """A named point (for loads, contacts and output)."""
+        pt = Point(name, sp.sympify(x), sp.sympify(y))
+        self.points.append(pt)
+        return pt
+
+    def constraint(self, name: str, expr: Any) -> None:
+        """A holonomic constraint expr(q) = 0."""
+        self.constraints.append((name, sp.sympify(expr)))
+
+    def gravity(self, g: Any) -> None:
+        """Uniform gravity of magnitude g along -y on every body."""
+        self.gravity_g = sp.sympify(g)
+
+    def potential(self, name: str, expr: Any) -> None:
+        """A conservative load given by its potential energy (for example a spring)."""
+        self.potentials.append((name, sp.sympify(expr)))
+
+    def torque(self, name: str, body: Body, law: Callable[[float, float, float], float]) -> TorqueLoad:
+        load = TorqueLoad(name, body, law)
+        self.torque_loads.append(load)
+        return load
+
+    def force(self, name: str, point: Point, law, indicators=None, indicator_names=()) -> PointLoad:
+        load = PointLoad(name, point, law, indicators, tuple(indicator_names))
+        self.point_loads.append(load)
+        return load
+
+    def sliding_contact(self, name: str, point: Point, normal, offset, tangent,
+                        mu_static: Any, mu_kinetic: Any, resistance: Any = 0) -> Contact:
+        """A sliding joint: adds the constraint n.r_point - offset = 0 (n a unit vector).
+
+        Its multiplier is then the normal force (N = -lambda along n), so Coulomb friction can use it.
+        """
+        n = tuple(sp.sympify(v) for v in normal)
+        t = tuple(sp.sympify(v) for v in tangent)
+        self.constraint(name, n[0] * point.x + n[1] * point.y - sp.sympify(offset))
+        c = Contact(name, point, n, t, *(sp.sympify(v) for v in (mu_static, mu_kinetic, resistance)))
+        self.contacts.append(c)
+        return c
+
+    # --- checks and compilation -------------------------------------------------------------
+    def validate(self) -> None:
+        """Report every problem of the description in one DescriptionError."""
+        problems = []
+        m, r = len(self.q), len(self.constraints)
+        if r >= m:
+            problems.append(f"the number of constraints {r} must be smaller than the number of coordinates {m}")
+        allowed = set(self.q) | set(vars(self.p).values())
+        time_free = allowed
+        names = [b.name for b in self.bodies] + [p.name for p in self.points] + [c[0] for c in self.constraints]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            problems.append(f"duplicate names: {dup}")
+        for b in self.bodies:
+            for key in ("x", "y", "angle", "mass", "inertia"):
+                stray = getattr(b, key).free_symbols - time_free
+                if stray:
+                    problems.append(f"body {b.name!r}.{key} uses unknown symbols {sorted(map(str, stray))}")
+            if b.mass.free_symbols & set(self.q) or b.inertia.free_symbols & set(self.q):
+                problems.append(f"body {b.name!r}: mass and inertia must not depend on q")
+        for name, e in self.constraints + self.potentials:
+            stray = e.free_symbols - time_free
+            if stray:
+                problems.append(f"{name!r} uses unknown symbols {sorted(map(str, stray))}")
+        for c in self.contacts:
+            norm = sp.simplify(c.normal[0] ** 2 + c.normal[1] ** 2)
+            dot = sp.simplify(c.normal[0] * c.tangent[0] + c.normal[1] * c.tangent[1])
+            if norm != 1 or dot != 0:
+                problems.append(f"contact {c.name!r}: normal must be a unit vector orthogonal to the tangent")
+        if not self.bodies:
+            problems.append("no bodies")
+        if problems:
+            raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
+
+    def compile(self, parameter_hash: str = ""):
+        """Derive the symbolic equations, generate and cache numeric code, bind parameters.
+
+        Returns
+        -------
+        study.model.EquationsOfMotion
+        """
+        from study.model.compile import compile_description  # local: compile imports this module
+
+        self.validate()
+        return compile_description(self, parameter_hash)

@@ -1,0 +1,84 @@
+"""Symbolic derivation: mechanism description -> M(q), velocity terms, potential, Phi, Phi_q, gamma.
+
+Pure functions of a :class:`~study.model.builder.MechanismBuilder` description. For body i with
+centre of mass r_i(q) and angle theta_i(q):
+
+    M = sum_i m_i J_i^T J_i + I_i j_i^T j_i              J_i = dr_i/dq,  j_i = dtheta_i/dq
+    C(q, qd) qd = sum_i m_i J_i^T (Jdot_i qd) + I_i j_i^T (jdot_i qd)
+    V = sum_i m_i g y_i + sum of spring potentials
+    gamma = -(Phi_q qd)_q qd
+
+so that M qdd + C qd + dV/dq + Phi_q^T lambda = Q_applied.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from study.model.builder import MechanismBuilder
+
+
+@dataclass(frozen=True)
+class SymbolicEquations:
+    """Sympy matrices of one mechanism (symbols: builder.q, builder.qd and builder.p)."""
+
+    mass: sp.Matrix            # (m, m)
+    velocity_terms: sp.Matrix  # (m, 1)  C(q, qd) qd
+    potential: sp.Expr         # V(q)
+    potential_gradient: sp.Matrix  # (m, 1)
+    phi: sp.Matrix             # (r, 1)
+    phi_q: sp.Matrix           # (r, m)
+    gamma: sp.Matrix           # (r, 1)
+    point_positions: dict[str, sp.Matrix]       # (2, 1)
+    point_jacobians: dict[str, sp.Matrix]       # (2, m)
+    point_bias: dict[str, sp.Matrix]            # (2, 1)  Jdot qd
+    angle_jacobians: dict[str, sp.Matrix]       # (1, m)  per body
+
+
+def _bias(jac: sp.Matrix, q: sp.Matrix, qd: sp.Matrix) -> sp.Matrix:
+    """Jdot qd = d(J qd)/dq qd."""
+    return (jac * qd).jacobian(q) * qd
+
+
+def derive(b: MechanismBuilder) -> SymbolicEquations:
+    q, qd = b.q, b.qd
+    m = len(q)
+    mass = sp.zeros(m, m)
+    vel = sp.zeros(m, 1)
+    potential = sp.Integer(0)
+    angle_jacobians = {}
+    for body in b.bodies:
+        r = sp.Matrix([body.x, body.y])
+        jr = r.jacobian(q)
+        ja = sp.Matrix([body.angle]).jacobian(q)
+        angle_jacobians[body.name] = ja
+        mass += body.mass * jr.T * jr + body.inertia * ja.T * ja
+        vel += body.mass * jr.T * _bias(jr, q, qd) + body.inertia * ja.T * _bias(ja, q, qd)
+        if b.gravity_g is not None:
+            potential += body.mass * b.gravity_g * body.y
+    for _, expr in b.potentials:
+        potential += expr
+    phi = sp.Matrix([expr for _, expr in b.constraints]) if b.constraints else sp.zeros(0, 1)
+    phi_q = phi.jacobian(q) if b.constraints else sp.zeros(0, m)
+    gamma = -_bias(phi_q, q, qd) if b.constraints else sp.zeros(0, 1)
+    positions, jacobians, bias = {}, {}, {}
+    for pt in b.points:
+        r = sp.Matrix([pt.x, pt.y])
+        positions[pt.name] = r
+        jacobians[pt.name] = r.jacobian(q)
+        bias[pt.name] = _bias(jacobians[pt.name], q, qd)
+    return SymbolicEquations(
+        mass=mass,
+        velocity_terms=vel,
+        potential=potential,
+        potential_gradient=sp.Matrix([potential]).jacobian(q).T,
+        phi=phi,
+        phi_q=phi_q,
+        gamma=gamma,
+        point_positions=positions,
+        point_jacobians=jacobians,
+        point_bias=bias,
+        angle_jacobians=angle_jacobians,
+    )

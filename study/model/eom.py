@@ -1,0 +1,165 @@
+"""The numeric equations-of-motion interface at the centre of the solver.
+
+A planar mechanism in m redundant coordinates q with r holonomic constraints::
+
+    M(q) q'' + Phi_q(q)^T lambda = Q(t, q, q')
+    Phi(q) = 0,   Phi_q q'' = gamma(q, q'),   gamma = -(Phi_q q')_q q'
+
+The solver only ever sees this object. It can come from :class:`study.model.MechanismBuilder`
+or be written by hand from plain callables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+Array = np.ndarray
+
+
+@dataclass(frozen=True)
+class SlidingContact:
+    """A sliding joint whose normal reaction is the multiplier of one constraint row.
+
+    The constraint row ``constraint_index`` must be the normal gap of the contact point (a distance,
+    unit normal), so that its multiplier is a force: the guide pushes the body with N = -lambda
+    along the normal. The tangential velocity is ``v_t = tangent_jacobian(q) @ qd`` and its
+    acceleration ``a_t = tangent_jacobian(q) @ qdd + tangent_bias(q, qd)``.
+
+    Attributes
+    ----------
+    name : str
+    constraint_index : int
+    tangent_jacobian : callable (q) -> (m,)
+    tangent_bias : callable (q, qd) -> float
+    mu_static, mu_kinetic : float
+        Coulomb coefficients; equal unless a parameter set says otherwise.
+    resistance : float
+        Constant extra resistance opposing sliding [N] (paper 000's F); part of the static limit too.
+    """
+
+    name: str
+    constraint_index: int
+    tangent_jacobian: Callable[[Array], Array]
+    tangent_bias: Callable[[Array, Array], float]
+    mu_static: float
+    mu_kinetic: float
+    resistance: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("mu_static", "mu_kinetic", "resistance"):
+            value = getattr(self, key)
+            if not np.isfinite(value) or value < 0:
+                raise ValueError(f"contact {self.name!r}: {key} = {value!r} must be finite and >= 0")
+
+
+def _no_forces(t: float, q: Array, qd: Array) -> dict[str, Array]:
+    return {}
+
+
+@dataclass(frozen=True)
+class EquationsOfMotion:
+    """Callables describing a constrained planar mechanism (shapes: q, qd (m,), Phi (r,)).
+
+    Parameters
+    ----------
+    n_coordinates, n_constraints : int
+        m and r.
+    mass : callable (q) -> (m, m)
+        Symmetric positive-definite mass matrix.
+    forces : callable (t, q, qd[, mode]) -> (m,)
+        Everything on the right-hand side: applied loads, gravity and the velocity-dependent
+        terms (-C(q, qd) qd). It must accept ``mode=`` if ``indicators`` is given.
+    phi : callable (q) -> (r,)
+    phi_q : callable (q) -> (r, m)
+    gamma : callable (q, qd) -> (r,)
+        ``-(Phi_q qd)_q qd``.
+    contacts : sequence of SlidingContact
+        Sliding joints with Coulomb friction (optional).
+    potential_energy : callable (q) -> float, optional
+        Potential of the conservative loads included in ``forces`` (gravity, springs).
+    applied_forces : callable (t, q, qd[, mode]) -> dict[str, (m,)], optional
+        Generalized force of every non-conservative applied load, by name (their work is tracked).
+    indicators : callable (t, q, qd) -> (k,), optional
+        Switching functions of discontinuous loads. Between two zero crossings the loads use a
+        frozen ``mode`` (tuple of +-1, the indicators' signs), so an integrator can locate switches.
+    """
+
+    n_coordinates: int
+    n_constraints: int
+    mass: Callable[[Array], Array]
+    forces: Callable[..., Array]
+    phi: Callable[[Array], Array]
+    phi_q: Callable[[Array], Array]
+    gamma: Callable[[Array, Array], Array]
+    name: str = "user"
+    coordinate_names: tuple[str, ...] = ()
+    constraint_names: tuple[str, ...] = ()
+    contacts: tuple[SlidingContact, ...] = ()
+    potential_energy: Callable[[Array], float] | None = None
+    applied_forces: Callable[..., Mapping[str, Array]] = _no_forces
+    indicators: Callable[[float, Array, Array], Array] | None = None
+    indicator_names: tuple[str, ...] = ()
+    parameter_hash: str = ""
+    points: Mapping[str, Callable[[Array], Array]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        m, r = self.n_coordinates, self.n_constraints
+        problems = []
+        if not isinstance(m, int) or m < 1:
+            problems.append(f"n_coordinates = {m!r} must be a positive integer")
+        if not isinstance(r, int) or not 0 <= r < (m if isinstance(m, int) else 1):
+            problems.append(f"n_constraints = {r!r} must be an integer with 0 <= r < n_coordinates = {m!r}")
+        for key in ("mass", "forces", "phi", "phi_q", "gamma"):
+            if not callable(getattr(self, key)):
+                problems.append(f"{key} must be callable, got {type(getattr(self, key)).__name__}")
+        if self.coordinate_names and len(self.coordinate_names) != m:
+            problems.append(f"{len(self.coordinate_names)} coordinate_names for {m} coordinates")
+        if self.constraint_names and len(self.constraint_names) != r:
+            problems.append(f"{len(self.constraint_names)} constraint_names for {r} constraints")
+        for c in self.contacts:
+            if not 0 <= c.constraint_index < (r if isinstance(r, int) else 0):
+                problems.append(f"contact {c.name!r}: constraint_index {c.constraint_index} outside 0..{r - 1}")
+        if problems:
+            raise ValueError(f"EquationsOfMotion {self.name!r}: " + "; ".join(problems))
+        if not self.coordinate_names:
+            object.__setattr__(self, "coordinate_names", tuple(f"q{i + 1}" for i in range(m)))
+        if not self.constraint_names:
+            object.__setattr__(self, "constraint_names", tuple(f"phi{i + 1}" for i in range(r)))
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom n = m - r."""
+        return self.n_coordinates - self.n_constraints
+
+    def kinetic_energy(self, q: Array, qd: Array) -> float:
+        """T = 1/2 qd^T M(q) qd."""
+        return 0.5 * float(qd @ self.mass(q) @ qd)
+
+    def check_shapes(self, q: Array, qd: Array, t: float = 0.0) -> None:
+        """Evaluate every callable once and raise a ValueError naming any with a wrong shape."""
+        m, r = self.n_coordinates, self.n_constraints
+        expected = {
+            "mass(q)": (self.mass(q), (m, m)),
+            "forces(t, q, qd)": (self.forces(t, q, qd), (m,)),
+            "phi(q)": (self.phi(q), (r,)),
+            "phi_q(q)": (self.phi_q(q), (r, m)),
+            "gamma(q, qd)": (self.gamma(q, qd), (r,)),
+        }
+        bad = [f"{k} has shape {np.shape(v)}, expected {s}" for k, (v, s) in expected.items() if np.shape(v) != s]
+        if bad:
+            raise ValueError(f"EquationsOfMotion {self.name!r}: " + "; ".join(bad))
+
+
+def as_state(q: Sequence[float], qd: Sequence[float], m: int) -> tuple[Array, Array]:
+    """Validate and convert q, qd to float arrays of shape (m,)."""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    for label, v in (("q", q), ("qd", qd)):
+        if v.shape != (m,):
+            raise ValueError(f"{label} must have shape ({m},), got {v.shape}")
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{label} = {v} must be finite")
+    return q, qd
