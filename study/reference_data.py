@@ -1,4 +1,8 @@
-"""Reference numbers and tolerances kept once, in ``reference/tolerances.toml``, each with its reason."""
+"""Reference numbers and tolerances kept once, in ``reference/<table>.toml``, each with its reason.
+
+Each entry is a TOML table ``[key]`` with ``value`` and ``reason``. The default table is
+``tolerances``; the cross-validation against Exudyn keeps its own in ``cross_validation``.
+"""
 
 from __future__ import annotations
 
@@ -9,18 +13,21 @@ from study.params import REFERENCE_DIR
 
 
 @lru_cache(maxsize=None)
-def _table() -> dict:
-    with open(REFERENCE_DIR / "tolerances.toml", "rb") as fh:
+def _table(table: str) -> dict:
+    path = REFERENCE_DIR / f"{table}.toml"
+    if not path.exists():
+        raise FileNotFoundError(f"no reference table {path}")
+    with open(path, "rb") as fh:
         return tomllib.load(fh)
 
 
-def tolerance(key: str) -> float:
-    """The value of ``[key]`` in reference/tolerances.toml (KeyError lists the known keys)."""
-    table = _table()
-    if key not in table:
-        raise KeyError(f"no tolerance {key!r} in reference/tolerances.toml; known: {', '.join(table)}")
-    return float(table[key]["value"])
+def tolerance(key: str, table: str = "tolerances") -> float:
+    """The value of ``[key]`` in reference/<table>.toml (KeyError lists the known keys)."""
+    data = _table(table)
+    if key not in data:
+        raise KeyError(f"no entry {key!r} in reference/{table}.toml; known: {', '.join(data)}")
+    return float(data[key]["value"])
 
 
-def reason(key: str) -> str:
-    return _table()[key]["reason"]
+def reason(key: str, table: str = "tolerances") -> str:
+    return _table(table)[key]["reason"]

@@ -1,0 +1,178 @@
+"""``simulate``: one call from equations (or a built-in mechanism) to a SimulationResult."""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from study.model.eom import EquationsOfMotion, as_state
+from study.results import SimulationResult, package_versions
+from study.solver.accelerations import make_acceleration_solver
+from study.solver.dynamics import Dynamics
+from study.solver.integrate import INTEGRATORS, integrate
+from study.solver.stabilization import make_stabilization
+
+# Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
+# (1 s) with 100 points and the slider-crank's slow motion with room to spare.
+DEFAULT_OUTPUT_STEP = 0.01
+
+
+def _check_positive(name: str, value) -> None:
+    if value is not None and not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{name} = {value!r} must be finite and > 0")
+
+
+def resolve(eom_or_mechanism, variant: str | None):
+    """An EquationsOfMotion, or a built-in mechanism name (with its variant) -> (eom, params or None)."""
+    if isinstance(eom_or_mechanism, EquationsOfMotion):
+        if variant is not None:
+            raise ValueError("variant= applies to built-in mechanism names, not to an EquationsOfMotion")
+        return eom_or_mechanism, None
+    if isinstance(eom_or_mechanism, str):
+        from study.mechanisms import load
+
+        ps, eom = load(eom_or_mechanism, variant or "seed")
+        return eom, ps
+    raise TypeError(f"expected an EquationsOfMotion or a mechanism name, got {type(eom_or_mechanism).__name__}")
+
+
+def simulate(
+    eom_or_mechanism: EquationsOfMotion | str,
+    q0=None,
+    qd0=None,
+    t_end: float = 1.0,
+    *,
+    method: str = "none",
+    integrator: str = "RK45",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    step: float | None = None,
+    output_step: float = DEFAULT_OUTPUT_STEP,
+    acceleration_solver: str = "multiplier",
+    variant: str | None = None,
+    progress: Callable[[float], None] | None = None,
+    **method_options,
+) -> SimulationResult:
+    """Simulate a constrained mechanism.
+
+    Parameters
+    ----------
+    eom_or_mechanism : EquationsOfMotion or str
+        A user's equations, or 'slider_crank' / 'quick_return' (then ``variant`` selects the parameter
+        set, default 'seed', and q0, qd0 default to its consistent initial state).
+    q0, qd0 : (m,) array_like
+        Initial state; it should satisfy the constraints (see ``study.solver.initial``).
+    t_end : float
+        End time [s], > 0.
+    method : str
+        Stabilization: 'none', 'baumgarte', 'sliding_mode', 'projection'; options go in
+        ``method_options`` (d, omega or alpha, beta; Lambda, K, k, sgn, width; weighting).
+    integrator : str
+        'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: rtol/atol) or 'RK4' (fixed ``step``).
+    acceleration_solver : str
+        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal'.
+    output_step : float
+        Spacing of the saved samples [s].
+
+    Returns
+    -------
+    SimulationResult
+    """
+    eom, ps = resolve(eom_or_mechanism, variant)
+    for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("step", step),
+                        ("output_step", output_step)):
+        _check_positive(name, value)
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {integrator!r}; valid choices: {', '.join(INTEGRATORS)}")
+    if integrator == "RK4" and step is None:
+        raise ValueError("integrator 'RK4' is fixed-step: give step= (the step size h > 0)")
+    if q0 is None or qd0 is None:
+        if ps is None:
+            raise ValueError("q0 and qd0 are required for a user's EquationsOfMotion")
+        from study.mechanisms import initial_state
+
+        state = initial_state(ps, eom)
+        q0 = state.q if q0 is None else q0
+        qd0 = state.qd if qd0 is None else qd0
+    q0, qd0 = as_state(q0, qd0, eom.n_coordinates)
+    eom.check_shapes(q0, qd0)
+
+    stabilization = make_stabilization(method, **method_options)
+    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
+    dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
+    m = eom.n_coordinates
+    y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
+
+    indicators = None
+    if eom.indicators is not None:
+        def indicators(t, y):
+            return eom.indicators(t, y[:m], y[m:2 * m])
+
+    post_step = None
+    if stabilization.projects:
+        def post_step(y):
+            q, qd, changed = stabilization.project(eom, y[:m], y[m:2 * m])
+            return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
+
+    n_out = int(np.floor(t_end / output_step + 1e-9))
+    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
+    t_out[-1] = min(t_out[-1], t_end)
+
+    cpu0 = time.process_time()
+    traj = integrate(dyn.rhs, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
+                     step=step, indicators=indicators, post_step=post_step, progress=progress)
+    cpu = time.process_time() - cpu0
+    nfev = dyn.nfev
+
+    result = assemble_result(dyn, traj.t, traj.y, traj.modes)
+    result.stats.update({
+        "steps": traj.steps,
+        "nfev": nfev,
+        "projections": traj.projections,
+        "restarts": traj.restarts,
+        "events": len(traj.events),
+        "event_times": [e["t"] for e in traj.events],
+        "cpu_seconds": cpu,
+        **dyn.accelerations.statistics(),
+    })
+    result.meta.update({
+        "engine": "in-house",
+        "mechanism": ps.mechanism if ps else eom.name,
+        "variant": ps.variant if ps else None,
+        "parameter_hash": ps.sha256 if ps else eom.parameter_hash,
+        "integrator": integrator,
+        "rtol": rtol if integrator != "RK4" else None,
+        "atol": atol if integrator != "RK4" else None,
+        "step": step,
+        "acceleration_solver": acceleration_solver,
+        "output_step": output_step,
+        "t_end": float(t_end),
+        **stabilization.settings(),
+        "versions": package_versions(),
+    })
+    return result
+
+
+def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) -> SimulationResult:
+    """Post-process samples: accelerations, multipliers, residuals and energies at every sample."""
+    eom = dyn.eom
+    m, r = eom.n_coordinates, eom.n_constraints
+    n = len(t)
+    qdd, lam = np.zeros((n, m)), np.zeros((n, r))
+    phi, phidot = np.zeros((n, r)), np.zeros((n, r))
+    kinetic, potential = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        q, qd = y[k, :m], y[k, m:2 * m]
+        qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
+        phi[k] = eom.phi(q)
+        phidot[k] = eom.phi_q(q) @ qd
+        kinetic[k] = eom.kinetic_energy(q, qd)
+        potential[k] = eom.potential_energy(q) if eom.potential_energy else 0.0
+    energies = {"kinetic": kinetic, "potential": potential}
+    for i, name in enumerate(dyn.work_names):
+        energies[f"work_{name}"] = y[:, 2 * m + i]
+    meta = {"coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
+            "has_potential": eom.potential_energy is not None}
+    return SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, {}, {}, meta)

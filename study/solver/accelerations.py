@@ -1,0 +1,142 @@
+"""Acceleration solvers: given M, Q, Phi_q and the acceleration right-hand side c, find qdd and lambda.
+
+    M qdd + Phi_q^T lambda = Q,        Phi_q qdd = c        (c = gamma + stabilization term)
+
+Three ways, chosen by name (``ACCELERATION_SOLVERS``):
+
+- ``multiplier``: the saddle-point (augmented) system, solved directly.
+- ``partitioned``: coordinate partitioning, papers 000/001's null-space matrix R = [E; -Phi_v^-1 Phi_u]
+  (000 calls D = R^T): [R^T M; Phi_q] qdd = [R^T Q; c]. The dependent coordinates v are chosen by
+  column-pivoted QR of Phi_q and chosen again when Phi_v becomes ill-conditioned; switches are recorded.
+- ``orthonormal``: an orthonormal null-space basis N of Phi_q (from QR of Phi_q^T):
+  qdd = Phi_q^+ c + N z with (N^T M N) z = N^T (Q - M Phi_q^+ c).
+
+Each returns lambda too, from the projection of M qdd - Q onto the range of Phi_q^T.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+Array = np.ndarray
+
+
+class AccelerationSolver:
+    """Contract: ``solve(M, Q, J, c) -> (qdd, lam)`` with shapes (m,m), (m,), (r,m), (r,) -> (m,), (r,).
+
+    Subclasses implement ``_solve``. A solver may keep state between calls (the partition), so a
+    simulation creates its own instance.
+    """
+
+    name = ""
+
+    def solve(self, M: Array, Q: Array, J: Array, c: Array) -> tuple[Array, Array]:
+        if J.shape[0] == 0:
+            return np.linalg.solve(M, Q), np.zeros(0)
+        return self._solve(M, Q, J, c)
+
+    def _solve(self, M, Q, J, c):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def statistics(self) -> dict:
+        return {}
+
+
+def _multipliers_from_residual(J: Array, residual: Array) -> Array:
+    """lambda with J^T lambda = residual (= Q - M qdd), by least squares on the range of J^T."""
+    return np.linalg.lstsq(J.T, residual, rcond=None)[0]
+
+
+class Multiplier(AccelerationSolver):
+    """Augmented saddle-point form [[M, J^T], [J, 0]] [qdd; lambda] = [Q; c]."""
+
+    name = "multiplier"
+
+    def _solve(self, M, Q, J, c):
+        m, r = M.shape[0], J.shape[0]
+        K = np.zeros((m + r, m + r))
+        K[:m, :m] = M
+        K[:m, m:] = J.T
+        K[m:, :m] = J
+        x = np.linalg.solve(K, np.concatenate([Q, c]))
+        return x[:m], x[m:]
+
+
+@dataclass
+class Partitioned(AccelerationSolver):
+    """Coordinate partitioning with the null-space matrix R = [E; -Phi_v^-1 Phi_u] (001 eq. 8, 000 eq. 24).
+
+    Parameters
+    ----------
+    switch_cond : float
+        Re-choose the dependent coordinates when cond(Phi_v) exceeds this. 1e3: beyond it the
+        elimination loses ~3 digits more than the best available partition (near a dead centre
+        of the current partition), well before it becomes singular.
+    """
+
+    switch_cond: float = 1e3
+    name: str = "partitioned"
+    dependent: tuple[int, ...] | None = None
+    switches: list = field(default_factory=list)
+
+    def choose(self, J: Array) -> tuple[int, ...]:
+        _, _, piv = sla.qr(J, mode="economic", pivoting=True)
+        return tuple(sorted(int(i) for i in piv[: J.shape[0]]))
+
+    def null_space_matrix(self, J: Array) -> Array:
+        """R (m, n) with J R = 0 and R[u] = E for the independent coordinates u."""
+        m, r = J.shape[1], J.shape[0]
+        if self.dependent is None or np.linalg.cond(J[:, list(self.dependent)]) > self.switch_cond:
+            new = self.choose(J)
+            if self.dependent is not None and new != self.dependent:
+                self.switches.append((self.dependent, new))
+            self.dependent = new
+        dep = list(self.dependent)
+        ind = [i for i in range(m) if i not in self.dependent]
+        R = np.zeros((m, m - r))
+        R[ind, :] = np.eye(m - r)
+        R[dep, :] = -np.linalg.solve(J[:, dep], J[:, ind])
+        return R
+
+    def _solve(self, M, Q, J, c):
+        R = self.null_space_matrix(J)
+        A = np.vstack([R.T @ M, J])
+        qdd = np.linalg.solve(A, np.concatenate([R.T @ Q, c]))
+        dep = list(self.dependent)
+        lam = np.linalg.solve(J[:, dep].T, (Q - M @ qdd)[dep])  # rows v of M qdd + J^T lam = Q
+        return qdd, lam
+
+    def statistics(self) -> dict:
+        return {"partition_switches": len(self.switches), "dependent_coordinates": list(self.dependent or ())}
+
+
+class Orthonormal(AccelerationSolver):
+    """Orthonormal null-space basis from a full QR of Phi_q^T."""
+
+    name = "orthonormal"
+
+    def _solve(self, M, Q, J, c):
+        r = J.shape[0]
+        Qf, Rf = np.linalg.qr(J.T, mode="complete")
+        Y, N = Qf[:, :r], Qf[:, r:]
+        qp = Y @ np.linalg.solve(Rf[:r].T, c)       # particular solution, J qp = c
+        z = np.linalg.solve(N.T @ M @ N, N.T @ (Q - M @ qp))
+        qdd = qp + N @ z
+        lam = np.linalg.solve(Rf[:r], Y.T @ (Q - M @ qdd))
+        return qdd, lam
+
+
+ACCELERATION_SOLVERS: dict[str, type[AccelerationSolver]] = {
+    "multiplier": Multiplier,
+    "partitioned": Partitioned,
+    "orthonormal": Orthonormal,
+}
+
+
+def make_acceleration_solver(name: str) -> AccelerationSolver:
+    if name not in ACCELERATION_SOLVERS:
+        raise ValueError(f"unknown acceleration solver {name!r}; valid choices: {', '.join(ACCELERATION_SOLVERS)}")
+    return ACCELERATION_SOLVERS[name]()

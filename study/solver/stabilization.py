@@ -1,0 +1,228 @@
+"""Constraint stabilization methods, chosen by name (``STABILIZATIONS``).
+
+The acceleration-level constraint is Phi_q qdd = gamma + b, with Phi_ddot = b the desired
+constraint dynamics (Phi_ddot = Phi_q qdd - gamma):
+
+- ``none``:         b = 0 (Phi_ddot = 0; Phi drifts).
+- ``baumgarte``:    b = -2 d w Phidot - w^2 Phi          (001 eq. 11; alpha = d w, beta = w).
+- ``sliding_mode``: s = Phidot + Lambda Phi,  b = -Lambda Phidot - K s - k sgn(s)   (001 eqs. 14-17).
+- ``projection``:   b = 0, and after every accepted step q is projected onto Phi = 0 and qd onto
+                    Phi_q qd = 0 (minimum-norm or mass-weighted Gauss-Newton).
+
+The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from study.model.eom import EquationsOfMotion
+
+Array = np.ndarray
+
+
+# --- sgn approximations (001, after eq. 17) ---------------------------------------------------
+def _sign(s: Array, width: float) -> Array:
+    return np.sign(s)
+
+
+def _sat(s: Array, width: float) -> Array:
+    return np.clip(s / width, -1.0, 1.0)
+
+
+def _tanh(s: Array, width: float) -> Array:
+    return np.tanh(s / width)
+
+
+def _arctan(s: Array, width: float) -> Array:
+    return (2.0 / math.pi) * np.arctan(s / width)
+
+
+def _sqrt(s: Array, width: float) -> Array:
+    return s / np.sqrt(s * s + width * width)
+
+
+# name -> f(s, width). The width is eps for sat and sqrt and 1/c for tanh(c s) and arctan(c s).
+SIGN_FUNCTIONS: dict[str, Callable[[Array, float], Array]] = {
+    "sign": _sign,
+    "sat": _sat,
+    "tanh": _tanh,
+    "arctan": _arctan,
+    "sqrt": _sqrt,
+}
+
+
+def _positive(owner: str, **values: float) -> None:
+    for key, value in values.items():
+        arr = np.atleast_1d(np.asarray(value, dtype=float))
+        if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+            raise ValueError(f"{owner}: {key} = {value!r} must be finite and > 0")
+
+
+class Stabilization:
+    """Contract (each method is a small object):
+
+    1. ``bias(phi, phidot) -> (r,)``: the desired Phi_ddot added to gamma.
+    2. ``project(eom, q, qd) -> (q, qd, projected)``: post-step correction; the default does nothing.
+    3. ``settings() -> dict``: the values that identify the method in results and tables.
+    """
+
+    name = ""
+    projects = False
+
+    def bias(self, phi: Array, phidot: Array) -> Array:
+        return np.zeros_like(phi)
+
+    def project(self, eom: EquationsOfMotion, q: Array, qd: Array) -> tuple[Array, Array, bool]:
+        return q, qd, False
+
+    def settings(self) -> dict:
+        return {"stabilization": self.name}
+
+
+@dataclass(frozen=True)
+class NoStabilization(Stabilization):
+    name: str = "none"
+
+
+@dataclass(frozen=True)
+class Baumgarte(Stabilization):
+    """Phi_ddot + 2 d w Phidot + w^2 Phi = 0 (001 eq. 11), 0 < d <= 1, w > 0.
+
+    The classic form Phi_ddot + 2 alpha Phidot + beta^2 Phi = 0 is accepted as
+    ``Baumgarte.from_alpha_beta(alpha, beta)`` (alpha = d w, beta = w).
+    Defaults d = 1 (critical damping) and w = 10 rad/s are the study's own: a decay time of
+    0.1 s, a tenth of the crank period, so the correction is fast but the ODE stays non-stiff.
+    """
+
+    d: float = 1.0
+    omega: float = 10.0
+    name: str = "baumgarte"
+
+    def __post_init__(self) -> None:
+        _positive("baumgarte", omega=self.omega, d=self.d)
+        if self.d > 1:
+            raise ValueError(f"baumgarte: d = {self.d!r} must satisfy 0 < d <= 1 (001 eq. 11)")
+
+    @classmethod
+    def from_alpha_beta(cls, alpha: float, beta: float) -> "Baumgarte":
+        _positive("baumgarte", alpha=alpha, beta=beta)
+        return cls(d=alpha / beta, omega=beta)
+
+    def bias(self, phi, phidot):
+        return -2.0 * self.d * self.omega * phidot - self.omega**2 * phi
+
+    def settings(self):
+        return {"stabilization": self.name, "d": self.d, "omega": self.omega}
+
+
+@dataclass(frozen=True)
+class SlidingMode(Stabilization):
+    """s = Phidot + Lambda Phi, s_dot = -K s - k sgn(s) (001 eqs. 14-16).
+
+    Lambda, K, k are diagonal, given as scalars (same for every constraint) or one value per
+    constraint. ``sgn`` names the approximation in ``SIGN_FUNCTIONS``; ``width`` is its eps (sat,
+    sqrt) or 1/c (tanh, arctan). Defaults (study's own): Lambda = K = 10 1/s as Baumgarte's w,
+    k = 1e-6 (a switching gain just above the drift rate seen without stabilization) and
+    width = 1e-8 (the constraint level the paper reports).
+    """
+
+    Lambda: float | tuple = 10.0
+    K: float | tuple = 10.0
+    k: float | tuple = 1e-6
+    sgn: str = "tanh"
+    width: float = 1e-8
+    name: str = "sliding_mode"
+
+    def __post_init__(self) -> None:
+        _positive("sliding_mode", Lambda=self.Lambda, K=self.K, k=self.k, width=self.width)
+        if self.sgn not in SIGN_FUNCTIONS:
+            raise ValueError(f"sliding_mode: unknown sgn approximation {self.sgn!r}; "
+                             f"valid choices: {', '.join(SIGN_FUNCTIONS)}")
+
+    def surface(self, phi, phidot):
+        return phidot + np.asarray(self.Lambda) * phi
+
+    def bias(self, phi, phidot):
+        lam, K, k = (np.asarray(v, dtype=float) for v in (self.Lambda, self.K, self.k))
+        s = phidot + lam * phi
+        return -lam * phidot - K * s - k * SIGN_FUNCTIONS[self.sgn](s, self.width)
+
+    def settings(self):
+        return {"stabilization": self.name, "Lambda": self.Lambda, "K": self.K, "k": self.k,
+                "sgn": self.sgn, "width": self.width}
+
+
+@dataclass(frozen=True)
+class Projection(Stabilization):
+    """Post-step projection of q onto Phi = 0 and qd onto Phi_q qd = 0.
+
+    ``weighting``: 'minimum_norm' (W = I) or 'mass' (W = M(q)), the metric of the correction
+    dq = -W^-1 Phi_q^T (Phi_q W^-1 Phi_q^T)^-1 Phi, iterated (Gauss-Newton) until max|Phi| <= tol.
+    ``tol`` = 1e-12 (study's own): below it a correction is round-off; ``max_iter`` = 10 Newton
+    steps are far more than a post-step correction of O(atol) needs (quadratic convergence).
+    """
+
+    weighting: str = "minimum_norm"
+    tol: float = 1e-12
+    max_iter: int = 10
+    name: str = "projection"
+    projects: bool = True
+
+    def __post_init__(self) -> None:
+        if self.weighting not in ("minimum_norm", "mass"):
+            raise ValueError(f"projection: weighting {self.weighting!r}; valid choices: minimum_norm, mass")
+        _positive("projection", tol=self.tol, max_iter=self.max_iter)
+
+    def _correction(self, eom, q, J, residual):
+        if self.weighting == "mass":
+            MinvJt = np.linalg.solve(eom.mass(q), J.T)
+            return -MinvJt @ np.linalg.solve(J @ MinvJt, residual)
+        return -J.T @ np.linalg.solve(J @ J.T, residual)
+
+    def project(self, eom, q, qd):
+        q = q.copy()
+        phi = eom.phi(q)
+        if np.max(np.abs(phi), initial=0.0) <= self.tol and np.max(np.abs(eom.phi_q(q) @ qd), initial=0.0) <= self.tol:
+            return q, qd, False
+        for _ in range(self.max_iter):
+            if np.max(np.abs(phi)) <= self.tol:
+                break
+            q += self._correction(eom, q, eom.phi_q(q), phi)
+            phi = eom.phi(q)
+        else:
+            raise RuntimeError(f"projection did not reach max|Phi| <= {self.tol:g} in {self.max_iter} "
+                               f"iterations (max|Phi| = {np.max(np.abs(phi)):.3g}); the step left the manifold too far")
+        J = eom.phi_q(q)
+        qd = qd + self._correction(eom, q, J, J @ qd)
+        return q, qd, True
+
+    def settings(self):
+        return {"stabilization": self.name, "weighting": self.weighting, "tol": self.tol}
+
+
+STABILIZATIONS: dict[str, type[Stabilization]] = {
+    "none": NoStabilization,
+    "baumgarte": Baumgarte,
+    "sliding_mode": SlidingMode,
+    "projection": Projection,
+}
+
+
+def make_stabilization(name: str, **options) -> Stabilization:
+    """Build a stabilization method by name. Baumgarte also accepts ``alpha``/``beta``."""
+    if name not in STABILIZATIONS:
+        raise ValueError(f"unknown stabilization method {name!r}; valid choices: {', '.join(STABILIZATIONS)}")
+    if name == "baumgarte" and ("alpha" in options or "beta" in options):
+        if set(options) != {"alpha", "beta"}:
+            raise ValueError(f"baumgarte: give either d and omega or alpha and beta, got {sorted(options)}")
+        return Baumgarte.from_alpha_beta(options["alpha"], options["beta"])
+    try:
+        return STABILIZATIONS[name](**options)
+    except TypeError as exc:
+        valid = [f for f in STABILIZATIONS[name].__dataclass_fields__ if f not in ("name", "projects")]
+        raise ValueError(f"{name}: bad options {sorted(options)}; valid options: {', '.join(valid)}") from exc
