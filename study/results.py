@@ -140,7 +140,7 @@ class SimulationResult:
         path = Path(path)
         base = path.with_suffix("") if path.suffix in (".csv", ".json") else path
         side = json.loads(base.with_suffix(".json").read_text())
-        df = pd.read_csv(base.with_suffix(".csv"), float_precision="round_trip")
+        df = pd.read_csv(base.with_suffix(".csv"))
         m, r = side["shape"]["m"], side["shape"]["r"]
         data = df.to_numpy()
         t = data[:, 0]

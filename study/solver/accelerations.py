@@ -72,9 +72,10 @@ class Partitioned(AccelerationSolver):
     Parameters
     ----------
     switch_cond : float
-        Re-choose the dependent coordinates when cond(Phi_v) exceeds this. 1e3: beyond it the
-        elimination loses ~3 digits more than the best available partition (near a dead centre
-        of the current partition), well before it becomes singular.
+        Re-choose the dependent coordinates when sigma_max(Phi_q) / sigma_min(Phi_v) exceeds this
+        (Phi_v is nearly singular compared with the full Jacobian). 1e3: beyond it the elimination
+        loses ~3 digits more than a well-chosen partition (near a dead centre of the current
+        partition), well before it becomes singular.
     """
 
     switch_cond: float = 1e3
@@ -86,10 +87,14 @@ class Partitioned(AccelerationSolver):
         _, _, piv = sla.qr(J, mode="economic", pivoting=True)
         return tuple(sorted(int(i) for i in piv[: J.shape[0]]))
 
+    def _ill_conditioned(self, J: Array) -> bool:
+        smallest = np.linalg.svd(J[:, list(self.dependent)], compute_uv=False).min()
+        return not smallest * self.switch_cond > np.linalg.norm(J, 2)
+
     def null_space_matrix(self, J: Array) -> Array:
         """R (m, n) with J R = 0 and R[u] = E for the independent coordinates u."""
         m, r = J.shape[1], J.shape[0]
-        if self.dependent is None or np.linalg.cond(J[:, list(self.dependent)]) > self.switch_cond:
+        if self.dependent is None or self._ill_conditioned(J):
             new = self.choose(J)
             if self.dependent is not None and new != self.dependent:
                 self.switches.append((self.dependent, new))

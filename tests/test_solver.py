@@ -1,0 +1,183 @@
+"""In-house solver: acceleration solvers, stabilization methods, integrators, energy, drift."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import handwritten
+from study import simulate
+from study.mechanisms import initial_state, load, quick_return
+from study.reference_data import tolerance
+from study.results import SimulationResult
+from study.solver.accelerations import ACCELERATION_SOLVERS, make_acceleration_solver
+from study.solver.stabilization import SIGN_FUNCTIONS, make_stabilization
+
+REF = {"integrator": "DOP853", "rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol")}
+
+
+def states(name, variant="seed", t_end=1.0):
+    """States along a short accurate run of a mechanism."""
+    r = simulate(name, variant=variant, t_end=t_end, output_step=0.1, method="projection", **REF)
+    _, eom = load(name, variant)
+    return eom, [(t, q, qd) for t, q, qd in zip(r.t, r.q, r.qd)]
+
+
+@pytest.mark.parametrize("name", ["slider_crank", "quick_return"])
+def test_acceleration_solvers_agree(name):
+    eom, samples = states(name, "smooth_cutting" if name == "quick_return" else "seed")
+    tol = tolerance("round_off")
+    for t, q, qd in samples:
+        M, Q, J, c = eom.mass(q), eom.forces(t, q, qd), eom.phi_q(q), eom.gamma(q, qd)
+        base_qdd, base_lam = make_acceleration_solver("multiplier").solve(M, Q, J, c)
+        for solver in ("partitioned", "orthonormal"):
+            qdd, lam = make_acceleration_solver(solver).solve(M, Q, J, c)
+            np.testing.assert_allclose(qdd, base_qdd, rtol=1e3 * tol, atol=1e3 * tol * np.abs(base_qdd).max())
+            np.testing.assert_allclose(lam, base_lam, rtol=1e3 * tol, atol=1e3 * tol * np.abs(base_lam).max())
+
+
+def test_partition_switches_on_pendulum():
+    """Cartesian pendulum swinging through the bottom: the dependent coordinate must change."""
+    eom = handwritten.cartesian_pendulum()
+    r = simulate(eom, [1.0, 0.0], [0.0, 0.0], 2.0, acceleration_solver="partitioned", method="projection")
+    assert r.stats["partition_switches"] >= 2
+    ref = simulate(eom, [1.0, 0.0], [0.0, 0.0], 2.0, acceleration_solver="multiplier", method="projection")
+    np.testing.assert_allclose(r.q, ref.q, atol=1e-6)
+
+
+@pytest.mark.parametrize("solver", list(ACCELERATION_SOLVERS))
+@pytest.mark.parametrize("method,options", [
+    ("none", {}), ("baumgarte", {}), ("baumgarte", {"alpha": 5.0, "beta": 10.0}), ("projection", {}),
+    ("projection", {"weighting": "mass"}),
+    *[("sliding_mode", {"sgn": s, "width": 1e-6}) for s in SIGN_FUNCTIONS if s != "sign"],
+    ("sliding_mode", {"sgn": "sign"}),
+])
+def test_every_method_on_pendulum(method, options, solver):
+    """A user's hand-written EquationsOfMotion runs through every method and solver."""
+    eom = handwritten.cartesian_pendulum()
+    integrator = {"integrator": "RK4", "step": 1e-3} if options.get("sgn") == "sign" else {}
+    r = simulate(eom, [0.6, -0.8], [0.8, 0.6], 1.0, method=method, acceleration_solver=solver, **integrator,
+                 **options)
+    assert np.abs(r.phi).max() < 1e-5
+    assert r.summary()["energy_error"] < 1e-4 * 9.81
+
+
+@pytest.mark.parametrize("variant", ["seed", "smooth_cutting"])
+@pytest.mark.parametrize("method,options", [
+    ("none", {}), ("baumgarte", {}), ("projection", {}),
+    *[("sliding_mode", {"sgn": s}) for s in SIGN_FUNCTIONS if s != "sign"],
+])
+def test_every_method_on_quick_return(method, options, variant):
+    r = simulate("quick_return", variant=variant, t_end=0.5, method=method, rtol=1e-8, atol=1e-10, **options)
+    assert np.abs(r.phi).max() < 1e-6
+    assert r.summary()["energy_error_relative"] < tolerance("energy_drift_factor") * 1e-8
+
+
+def test_sliding_mode_exact_sign_with_rk4_on_quick_return():
+    r = simulate("quick_return", variant="smooth_cutting", t_end=0.5, method="sliding_mode", sgn="sign",
+                 integrator="RK4", step=1e-3)
+    assert np.abs(r.phi).max() < 1e-6
+
+
+def test_on_off_switches_are_located():
+    """Each switch is an event; at the event the switching function is zero to round-off."""
+    ps, eom = load("quick_return", "seed")
+    r = simulate("quick_return", t_end=1.0, method="projection", **REF)
+    assert r.stats["events"] >= 4
+    ev = r.stats["event_times"]
+    assert np.all(np.diff(ev) > 0)
+    ref = simulate("quick_return", t_end=1.0, method="projection", integrator="DOP853", rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(ref.stats["event_times"], ev, atol=1e-8)
+
+
+def energy_free_quick_return():
+    ps = load("quick_return", "smooth_cutting")[0]
+    free = dataclasses.replace(ps, values=dataclasses.replace(ps.values, M=0.0, F_cut=0.0))
+    return free, quick_return.equations(free)
+
+
+def test_energy_conserved_without_drive_and_cutting():
+    ps, eom = energy_free_quick_return()
+    st = initial_state(ps, eom)
+    rtol = 1e-9
+    r = simulate(eom, st.q, st.qd, 2.0, method="projection", rtol=rtol, atol=1e-11)
+    e = r.energies["kinetic"] + r.energies["potential"]
+    assert set(r.energies) == {"kinetic", "potential", "work_drive", "work_cutting"}
+    assert np.abs(r.energies["work_cutting"]).max() == 0.0 and np.abs(r.energies["work_drive"]).max() == 0.0
+    assert np.abs(e - e[0]).max() <= tolerance("energy_drift_factor") * rtol * r.energies["kinetic"].max()
+
+
+@pytest.mark.parametrize("variant", ["seed", "smooth_cutting"])
+def test_energy_bookkeeping_with_drive_and_cutting(variant):
+    rtol = 1e-9
+    r = simulate("quick_return", variant=variant, t_end=2.0, method="projection", rtol=rtol, atol=1e-11)
+    assert r.energies["work_cutting"].min() < -1e5  # the cut does work
+    balance = r.energy_balance()
+    assert np.abs(balance - balance[0]).max() <= tolerance("energy_drift_factor") * rtol * r.energies["kinetic"].max()
+
+
+def test_drift_ordering():
+    """At RK45, rtol 1e-6, atol 1e-8, 5 s, smooth cutting: none > Baumgarte (d=1, w=10) > projection."""
+    drift = {}
+    for method in ("none", "baumgarte", "projection"):
+        r = simulate("quick_return", variant="smooth_cutting", t_end=5.0, method=method, rtol=1e-6, atol=1e-8)
+        drift[method] = np.abs(r.phi).max()
+    assert drift["none"] > drift["baumgarte"] > drift["projection"]
+
+
+def test_rk4_converges_at_order_4():
+    ps, eom = energy_free_quick_return()
+    ref = simulate(eom, *_ic(ps, eom), 0.5, method="none", **REF)
+    errors = []
+    steps = [4e-3, 2e-3, 1e-3]
+    for h in steps:
+        r = simulate(eom, *_ic(ps, eom), 0.5, method="none", integrator="RK4", step=h)
+        errors.append(np.abs(r.q - ref.q).max())
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(orders - 4) <= tolerance("rk4_order_band")), orders
+
+
+def _ic(ps, eom):
+    st = initial_state(ps, eom)
+    return st.q, st.qd
+
+
+@pytest.mark.parametrize("integrator", ["RK45", "DOP853", "Radau", "LSODA"])
+def test_adaptive_integrators_meet_tolerance(integrator):
+    rtol = 1e-7
+    ref = simulate("quick_return", variant="smooth_cutting", t_end=1.0, method="none", **REF)
+    r = simulate("quick_return", variant="smooth_cutting", t_end=1.0, method="none", integrator=integrator,
+                 rtol=rtol, atol=rtol * 1e-2)
+    scale = np.abs(ref.q).max()
+    assert np.abs(r.q - ref.q).max() <= tolerance("adaptive_global_error_factor") * rtol * scale
+
+
+def test_result_round_trip(tmp_path):
+    r = simulate("quick_return", variant="seed", t_end=0.2, method="baumgarte")
+    path = r.save(tmp_path / "run")
+    back = SimulationResult.load(path)
+    for key in ("t", "q", "qd", "qdd", "lam", "phi", "phidot"):
+        np.testing.assert_array_equal(getattr(back, key), getattr(r, key))
+    for key in r.energies:
+        np.testing.assert_array_equal(back.energies[key], r.energies[key])
+    assert back.stats == r.stats and back.meta["parameter_hash"] == r.meta["parameter_hash"]
+    assert list(back.to_dataframe().columns) == list(r.to_dataframe().columns)
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"method": "magic"}, "valid choices: none, baumgarte, sliding_mode, projection"),
+    ({"integrator": "Euler"}, "valid choices: RK45"),
+    ({"rtol": 0.0}, "rtol = 0.0 must be finite and > 0"),
+    ({"atol": -1.0}, "atol = -1.0 must be finite and > 0"),
+    ({"t_end": 0.0}, "t_end = 0.0 must be finite and > 0"),
+    ({"integrator": "RK4"}, "give step="),
+    ({"integrator": "RK4", "step": -1e-3}, "step = -0.001 must be finite and > 0"),
+    ({"acceleration_solver": "lu"}, "valid choices: multiplier, partitioned, orthonormal"),
+    ({"method": "sliding_mode", "sgn": "sigmoid"}, "valid choices: sign, sat, tanh, arctan, sqrt"),
+    ({"method": "baumgarte", "d": 2.0}, "0 < d <= 1"),
+    ({"method": "projection", "integrator": "LSODA"}, "post-step projection needs"),
+])
+def test_bad_input_is_named(kwargs, match):
+    kwargs.setdefault("t_end", 0.1)
+    with pytest.raises(ValueError, match=match):
+        simulate("quick_return", **kwargs)
