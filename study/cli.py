@@ -27,8 +27,44 @@ def _errata(args: argparse.Namespace) -> int:
     return 0
 
 
+def _simulate(args: argparse.Namespace) -> int:
+    from study.simulate import simulate
+
+    options = {}
+    for item in args.option or []:
+        key, _, value = item.partition("=")
+        if not value:
+            raise SystemExit(f"--option {item!r}: expected KEY=VALUE (e.g. omega=10 or sgn=tanh)")
+        try:
+            options[key] = float(value)
+        except ValueError:
+            options[key] = value
+    try:
+        result = simulate(args.mechanism, variant=args.case, t_end=args.t_end, method=args.method,
+                          integrator=args.integrator, rtol=args.rtol, atol=args.atol, step=args.step,
+                          acceleration_solver=args.acceleration_solver, **options)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    path = result.save(args.out)
+    s = result.summary()
+    print(f"{args.mechanism}/{args.case} {args.method} {args.integrator}: max|Phi| = {s['max_abs_phi']:.3e}, "
+          f"energy error = {s['energy_error']:.3e} J ({s['energy_error_relative']:.2e} of max T), "
+          f"CPU {s['cpu_seconds']:.3f} s, {result.stats['nfev']} evaluations -> {path}")
+    return 0
+
+
+def _sliding_mode(args: argparse.Namespace) -> int:
+    from study.model.compile import cache_dir
+    from study.studies.sliding_mode import run_study
+
+    for path in run_study(args.out / "tables", cache_dir() / "results"):
+        print(f"wrote {path}")
+    return 0
+
+
 def _reproduce(args: argparse.Namespace) -> int:
-    for step in (_initial, _errata):
+    for step in (_initial, _errata, _sliding_mode):
         code = step(args)
         if code:
             return code
@@ -47,6 +83,29 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
         p.set_defaults(func=func)
+    p = sub.add_parser("sliding-mode", help="001's drift claims over methods, sgn approximations and integrators")
+    p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
+    p.set_defaults(func=_sliding_mode)
+
+    from study.mechanisms import MECHANISMS
+    from study.solver.accelerations import ACCELERATION_SOLVERS
+    from study.solver.integrate import INTEGRATORS
+    from study.solver.stabilization import STABILIZATIONS
+
+    p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
+    p.add_argument("mechanism", choices=list(MECHANISMS))
+    p.add_argument("--case", default="seed", help="parameter-set variant (default: seed)")
+    p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
+    p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
+    p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
+    p.add_argument("--rtol", type=float, default=1e-8)
+    p.add_argument("--atol", type=float, default=1e-10)
+    p.add_argument("--step", type=float, default=None, help="fixed step h (RK4)")
+    p.add_argument("--t-end", type=float, default=20.0)
+    p.add_argument("--option", action="append", metavar="KEY=VALUE",
+                   help="stabilization option, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8")
+    p.add_argument("--out", type=Path, required=True, help="output path (writes .csv and .json)")
+    p.set_defaults(func=_simulate)
     return parser
 
 

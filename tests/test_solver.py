@@ -181,3 +181,14 @@ def test_bad_input_is_named(kwargs, match):
     kwargs.setdefault("t_end", 0.1)
     with pytest.raises(ValueError, match=match):
         simulate("quick_return", **kwargs)
+
+
+def test_sliding_mode_with_equal_gains_is_baumgarte_plus_switching_term():
+    """s = Phidot + L Phi, sdot = -K s - k sgn(s) gives Phi'' = -(L+K) Phidot - K L Phi - k sgn(s):
+    Baumgarte with 2 d w = L + K and w^2 = K L, plus the switching term. With L = K = w, d = 1."""
+    rng = np.random.default_rng(7)
+    phi, phidot = rng.normal(size=2), rng.normal(size=2)
+    sm = make_stabilization("sliding_mode", Lambda=10.0, K=10.0, k=1e-3, sgn="tanh", width=1e-8)
+    bg = make_stabilization("baumgarte", d=1.0, omega=10.0)
+    s = phidot + 10.0 * phi
+    np.testing.assert_allclose(sm.bias(phi, phidot) - bg.bias(phi, phidot), -1e-3 * np.tanh(s / 1e-8), rtol=1e-12)
