@@ -1,0 +1,1 @@
+"""Cross-validation of the in-house solver against the independent Exudyn models."""
