@@ -63,8 +63,16 @@ def _sliding_mode(args: argparse.Namespace) -> int:
     return 0
 
 
+def _report(args: argparse.Namespace) -> int:
+    from study.model.compile import cache_dir
+    from study.report import build_report
+
+    print(f"report: {build_report(args.out, cache_dir()).resolve()}")
+    return 0
+
+
 def _reproduce(args: argparse.Namespace) -> int:
-    for step in (_initial, _errata, _sliding_mode):
+    for step in (_initial, _errata, _sliding_mode, _report):
         code = step(args)
         if code:
             return code
@@ -78,6 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
     for name, func, text in (
         ("initial", _initial, "consistent initial conditions and the printed ones' residuals"),
         ("errata", _errata, "check the papers' printed formulas against the derived equations"),
+        ("report", _report, "figures, tables, index.md and report.html from saved results only"),
         ("reproduce", _reproduce, "run everything that exists and write reports/"),
     ):
         p = sub.add_parser(name, help=text)

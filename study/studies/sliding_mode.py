@@ -79,7 +79,7 @@ def reference_options() -> dict:
             "method": "projection"}
 
 
-def _file_name(setting: str, method: str, options: dict, t_end: float) -> str:
+def run_name(setting: str, method: str, options: dict, t_end: float) -> str:
     """Readable name plus a hash of everything that affects the run: options, horizon, parameters."""
     ps = load_parameters(MECHANISM, VARIANT)
     key = json.dumps({"options": options, "t_end": t_end, "parameters": ps.sha256}, sort_keys=True)
@@ -89,7 +89,7 @@ def _file_name(setting: str, method: str, options: dict, t_end: float) -> str:
 
 def _run(args) -> tuple[str, str, str]:
     setting, method, options, folder, t_end = args
-    path = folder / _file_name(setting, method, options, t_end)
+    path = folder / run_name(setting, method, options, t_end)
     if not path.with_suffix(".json").exists():
         simulate(MECHANISM, variant=VARIANT, t_end=t_end, **options).save(path)
     return setting, method, str(path)

@@ -1,0 +1,233 @@
+"""The report's figures, drawn from saved results only (restyling never reruns a simulation).
+
+Each ``*_figure`` function takes data that is already loaded (:class:`study.results.SimulationResult`
+objects, the study's tables) and returns a :class:`matplotlib.figure.Figure` built without pyplot,
+so no global backend or figure registry is touched; :func:`save_figure` writes it as PNG (Agg) and
+SVG. Output is deterministic: fixed style, fixed SVG id salt, no date in the metadata.
+"""
+
+from __future__ import annotations
+
+import io
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Collection, Iterator, Mapping, Sequence
+
+import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.colors import LogNorm, to_rgb
+from PIL import Image
+from matplotlib.figure import Figure
+
+from study.results import SimulationResult
+
+DPI = 110
+PNG_COLORS = 256
+
+STYLE = {
+    "font.size": 9,
+    "axes.titlesize": 10,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.35,
+    "grid.linewidth": 0.5,
+    "svg.fonttype": "none",  # text stays text: smaller, searchable SVG
+    "svg.hashsalt": "study-report",  # fixed element ids: the same data gives the same SVG
+    "path.simplify": True,
+}
+
+# Units of the saved quantities, by mechanism. Results do not record units; these follow the
+# mechanism modules' docstrings (quick-return: q = crank, rocker and rod angles; both constraints
+# are distances: the normal gap of A to the rocker line and the height of D above the ram guide).
+COORDINATE_UNITS = {"quick_return": "rad"}
+CONSTRAINT_UNITS = {"quick_return": "m"}
+
+# Stable colours per method so a method looks the same in every figure.
+_FIXED_STYLES = {
+    "reference": {"color": "0.2", "lw": 1.4, "ls": "-"},
+    "none": {"color": "black", "lw": 1.3, "ls": "-"},
+    "baumgarte": {"color": "tab:blue", "lw": 2.6, "ls": "-", "alpha": 0.55},
+    "projection": {"color": "tab:green", "lw": 1.3, "ls": "-"},
+}
+_VARIANT_COLORS = {"baumgarte": "tab:cyan", "sliding_mode": "tab:olive"}  # other gains than the default
+_SGN_COLORS = {"sign": "tab:red", "sat": "tab:orange", "tanh": "tab:purple", "arctan": "tab:brown",
+               "sqrt": "tab:pink"}
+
+
+def method_style(method: str) -> dict:
+    """Line style of a method name as used in the study's tables.
+
+    ``sliding_mode/<sgn>`` is dashed in the colour of its sgn approximation. A name with a gain
+    suffix (``'baumgarte w=100'``) gets a dash-dot line in a colour of its own method family.
+    """
+    base, _, suffix = method.partition(" ")
+    if base in _FIXED_STYLES:
+        style = dict(_FIXED_STYLES[base])
+    elif base.startswith("sliding_mode/"):
+        style = {"color": _SGN_COLORS.get(base.split("/", 1)[1], "tab:gray"), "lw": 1.0, "ls": (0, (4, 2))}
+    else:
+        style = {"color": "tab:gray", "lw": 1.0, "ls": ":"}
+    if suffix:
+        style["color"] = _VARIANT_COLORS.get(base.split("/")[0], tuple(0.55 * c for c in to_rgb(style["color"])))
+        style["ls"] = (0, (6, 2, 1.5, 2))
+        style["lw"] = min(style["lw"], 1.6)
+        style.pop("alpha", None)
+    return style
+
+
+def pretty_mechanism(meta: Mapping) -> str:
+    """'quick-return (variant seed)' from a result's metadata."""
+    name = str(meta.get("mechanism", "unknown mechanism")).replace("_", "-")
+    return f"{name} (variant {meta.get('variant', '?')})"
+
+
+@contextmanager
+def _style() -> Iterator[None]:
+    with matplotlib.rc_context(STYLE):
+        yield
+
+
+def save_figure(fig: Figure, folder: Path, stem: str) -> Path:
+    """Write ``<stem>.png`` (dpi :data:`DPI`) and ``<stem>.svg`` into ``folder``; returns the PNG path.
+
+    The PNG is reduced to a palette of :data:`PNG_COLORS` colours (no dithering): line plots of
+    thousands of noisy samples stay sharp and the file stays small enough to embed.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    png = folder / f"{stem}.png"
+    buffer = io.BytesIO()
+    with _style():
+        fig.savefig(buffer, dpi=DPI, format="png")
+        fig.savefig(folder / f"{stem}.svg", format="svg", metadata={"Date": None, "Creator": None})
+    buffer.seek(0)
+    with Image.open(buffer) as image:
+        paletted = image.convert("RGB").quantize(colors=PNG_COLORS, method=Image.Quantize.MEDIANCUT,
+                                                 dither=Image.Dither.NONE)
+    paletted.save(png, format="PNG", optimize=True)
+    return png
+
+
+def _positive(values: np.ndarray) -> np.ndarray:
+    """Exact zeros cannot be drawn on a log axis; they become gaps (NaN)."""
+    values = np.asarray(values, dtype=float).copy()
+    values[values <= 0.0] = np.nan
+    return values
+
+
+def constraint_violation_figure(runs: Mapping[str, SimulationResult], setting: str,
+                                quantity: str = "phi") -> Figure:
+    """max_i |Phi_i(t)| (``quantity='phi'``) or max_i |Phidot_i(t)| (``'phidot'``) on a log axis.
+
+    One line per method of ``runs`` (method name -> result), all at one integrator setting. These
+    correspond to paper 001's figures H.6, H.8 and H.9.
+    """
+    if quantity not in ("phi", "phidot"):
+        raise ValueError(f"quantity = {quantity!r}; expected 'phi' or 'phidot'")
+    if not runs:
+        raise ValueError(f"no runs to plot for setting {setting!r}")
+    first = next(iter(runs.values()))
+    unit = CONSTRAINT_UNITS.get(first.meta.get("mechanism"), "")
+    symbol = r"\Phi" if quantity == "phi" else r"\dot{\Phi}"
+    unit_text = (unit if quantity == "phi" else f"{unit}/s") if unit else "as saved"
+    with _style():
+        fig = Figure(figsize=(8.6, 4.6))
+        ax = fig.add_subplot()
+        for method, result in runs.items():
+            values = np.abs(getattr(result, quantity)).max(axis=1)
+            ax.plot(result.t, _positive(values), label=method, **method_style(method))
+        ax.set_yscale("log")
+        ax.set_xlabel("time t [s]")
+        ax.set_ylabel(rf"largest $|{symbol}_i(t)|$ over constraints i [{unit_text}]")
+        what = "position" if quantity == "phi" else "velocity"
+        ax.set_title(f"{pretty_mechanism(first.meta)}: {what} constraint violation\n"
+                     f"integrator {setting}, every stabilization method")
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), title="method", frameon=False)
+        ax.set_xlim(float(first.t[0]), float(first.t[-1]))
+        fig.tight_layout()
+    return fig
+
+
+def trajectories_figure(reference: SimulationResult, runs: Mapping[str, SimulationResult],
+                        setting: str) -> Figure:
+    """Top row: each coordinate of the reference run against time. Bottom row: |q_i - q_i,ref| of
+    every run in ``runs`` (method name -> result, one integrator setting) on a log axis."""
+    names = reference.meta.get("coordinate_names") or [f"q{i + 1}" for i in range(reference.q.shape[1])]
+    unit = COORDINATE_UNITS.get(reference.meta.get("mechanism"), "")
+    unit_text = f" [{unit}]" if unit else ""
+    m = len(names)
+    with _style():
+        fig = Figure(figsize=(3.6 * m, 6.0))
+        axes = fig.subplots(2, m, sharex=True, squeeze=False)
+        for i, name in enumerate(names):
+            top, bottom = axes[0, i], axes[1, i]
+            top.plot(reference.t, reference.q[:, i], **method_style("reference"))
+            top.set_ylabel(f"{name}{unit_text}")
+            top.set_title(f"{name}: reference run")
+            for method, result in runs.items():
+                q_ref = np.interp(result.t, reference.t, reference.q[:, i])
+                bottom.plot(result.t, _positive(np.abs(result.q[:, i] - q_ref)), label=method,
+                            **method_style(method))
+            bottom.set_yscale("log")
+            bottom.set_xlabel("time t [s]")
+            bottom.set_ylabel(f"|{name} - {name},ref|{unit_text}")
+            bottom.set_title(f"{name}: difference from the reference")
+        ref = reference.meta
+        ref_text = (f"reference: {ref.get('integrator')} rtol={ref.get('rtol')}, {ref.get('stabilization')}"
+                    if ref else "reference")
+        fig.suptitle(f"{pretty_mechanism(reference.meta)}: trajectories. Differences for integrator {setting}, "
+                     f"every stabilization method ({ref_text})", fontsize=10)
+        handles, labels = axes[1, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
+                   title="method")
+        fig.tight_layout(rect=(0, 0.1, 1, 1))
+    return fig
+
+
+def heatmap_figure(table: pd.DataFrame, value: str, settings: Sequence[str], methods: Sequence[str],
+                   title: str, colorbar_label: str, labels: pd.DataFrame | None = None,
+                   expected: Collection[tuple[str, str]] = ()) -> Figure:
+    """Method x integrator-setting heatmap of ``table[value]`` on a log colour scale.
+
+    ``table`` has columns ``integrator_setting``, ``method`` and ``value``; ``labels`` (same keys,
+    column ``value`` as text) gives the cell annotations, so they show the saved digits exactly.
+    Combinations without a row are left blank and marked 'missing' if they are in ``expected``
+    (setting, method) pairs, else 'not run'.
+    """
+    grid = np.full((len(methods), len(settings)), np.nan)
+    text = [["missing" if (s, m) in expected else "not run" for s in settings] for m in methods]
+    source = labels if labels is not None else table
+    keyed = {(r.integrator_setting, r.method): r for r in table.itertuples(index=False)}
+    keyed_text = {(r["integrator_setting"], r["method"]): r[value] for _, r in source.iterrows()}
+    for i, method in enumerate(methods):
+        for j, setting in enumerate(settings):
+            if (setting, method) in keyed:
+                grid[i, j] = float(getattr(keyed[(setting, method)], value))
+                text[i][j] = str(keyed_text[(setting, method)])
+    finite = grid[np.isfinite(grid) & (grid > 0)]
+    norm = LogNorm(vmin=finite.min(), vmax=finite.max()) if finite.size else None
+    with _style():
+        fig = Figure(figsize=(1.45 * len(settings) + 3.2, 0.42 * len(methods) + 2.0))
+        ax = fig.add_subplot()
+        ax.grid(False)
+        image = ax.imshow(np.where(grid > 0, grid, np.nan), cmap="viridis", norm=norm, aspect="auto")
+        cmap = image.get_cmap()
+        for i in range(len(methods)):
+            for j in range(len(settings)):
+                if np.isfinite(grid[i, j]) and grid[i, j] > 0 and norm is not None:
+                    r, g, b, _ = cmap(norm(grid[i, j]))
+                    color = "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.5 else "white"
+                else:
+                    color = "0.4"
+                ax.text(j, i, text[i][j], ha="center", va="center", fontsize=7.5, color=color)
+        ax.set_xticks(range(len(settings)), settings, rotation=20, ha="right")
+        ax.set_yticks(range(len(methods)), methods)
+        ax.set_xlabel("integrator setting")
+        ax.set_ylabel("stabilization method")
+        ax.set_title(title)
+        fig.colorbar(image, ax=ax, label=colorbar_label)
+        fig.tight_layout()
+    return fig
