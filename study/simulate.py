@@ -11,6 +11,7 @@ from study.model.eom import EquationsOfMotion, as_state
 from study.results import SimulationResult, package_versions
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.dynamics import Dynamics
+from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.stabilization import make_stabilization
 
@@ -53,6 +54,9 @@ def simulate(
     acceleration_solver: str = "multiplier",
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
+    friction: str | None = None,
+    friction_eps: float = 1e-3,
+    friction_sgn: str = "tanh",
     **method_options,
 ) -> SimulationResult:
     """Simulate a constrained mechanism.
@@ -75,6 +79,13 @@ def simulate(
         'multiplier', 'partitioned' (R/D matrix) or 'orthonormal'.
     output_step : float
         Spacing of the saved samples [s].
+    friction : {None, 'exact', 'regularized', 'sign'}
+        Coulomb friction at the equations' sliding contacts (``study.solver.friction``); None ignores
+        the contacts' friction data. 'exact': event-located stick/slip; 'regularized': sgn replaced
+        by ``friction_sgn`` ('tanh', 'sat', 'arctan', 'sqrt') of width ``friction_eps`` [m/s];
+        'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps`` also sets the
+        band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. The result gains
+        forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
 
     Returns
     -------
@@ -100,13 +111,21 @@ def simulate(
     eom.check_shapes(q0, qd0)
 
     stabilization = make_stabilization(method, **method_options)
+    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
     work_names = tuple(eom.applied_forces(0.0, q0, qd0))
-    dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
     m = eom.n_coordinates
-    y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
+    if law is None:
+        dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
+        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
+    else:
+        n_load = len(np.atleast_1d(eom.indicators(0.0, q0, qd0))) if eom.indicators is not None else 0
+        dyn = FrictionDynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names,
+                               law=law, n_load_modes=n_load)
+        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
 
     indicators = None
-    if eom.indicators is not None:
+    switching = StickSlipSwitching(dyn) if law is not None and law.switched else None
+    if eom.indicators is not None and switching is None:
         def indicators(t, y):
             return eom.indicators(t, y[:m], y[m:2 * m])
 
@@ -122,7 +141,8 @@ def simulate(
 
     cpu0 = time.process_time()
     traj = integrate(dyn.rhs, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
-                     step=step, indicators=indicators, post_step=post_step, progress=progress)
+                     step=step, indicators=indicators, post_step=post_step, progress=progress,
+                     switching=switching)
     cpu = time.process_time() - cpu0
     nfev = dyn.nfev
 
@@ -137,6 +157,8 @@ def simulate(
         "cpu_seconds": cpu,
         **dyn.accelerations.statistics(),
     })
+    if switching is not None:
+        result.stats["friction_transitions"] = switching.transitions
     result.meta.update({
         "engine": "in-house",
         "mechanism": ps.mechanism if ps else eom.name,
@@ -150,22 +172,35 @@ def simulate(
         "output_step": output_step,
         "t_end": float(t_end),
         **stabilization.settings(),
+        **(law.settings() if law is not None else {"friction": None}),
         "versions": package_versions(),
     })
     return result
 
 
 def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) -> SimulationResult:
-    """Post-process samples: accelerations, multipliers, residuals and energies at every sample."""
+    """Post-process samples: accelerations, multipliers, residuals and energies at every sample.
+
+    With friction (a FrictionDynamics) also the contacts' normal and tangential forces, stick flags
+    and the work of each contact's tangential force.
+    """
     eom = dyn.eom
     m, r = eom.n_coordinates, eom.n_constraints
     n = len(t)
     qdd, lam = np.zeros((n, m)), np.zeros((n, r))
     phi, phidot = np.zeros((n, r)), np.zeros((n, r))
     kinetic, potential = np.zeros(n), np.zeros(n)
+    with_friction = isinstance(dyn, FrictionDynamics)
+    nc = dyn.n_contacts if with_friction else 0
+    normal, tangential, stick = np.zeros((n, nc)), np.zeros((n, nc)), np.zeros((n, nc))
     for k in range(n):
         q, qd = y[k, :m], y[k, m:2 * m]
-        qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
+        if with_friction:
+            sol = dyn.contact_solution(t[k], q, qd, modes[k])
+            qdd[k], lam[k] = sol.qdd, sol.lam
+            normal[k], tangential[k], stick[k] = sol.normal, sol.friction, dyn.stick_flags(sol)
+        else:
+            qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
         phi[k] = eom.phi(q)
         phidot[k] = eom.phi_q(q) @ qd
         kinetic[k] = eom.kinetic_energy(q, qd)
@@ -173,6 +208,12 @@ def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) ->
     energies = {"kinetic": kinetic, "potential": potential}
     for i, name in enumerate(dyn.work_names):
         energies[f"work_{name}"] = y[:, 2 * m + i]
+    forces = {}
+    for j, name in enumerate(dyn.contact_names if with_friction else ()):
+        energies[f"work_friction_{name}"] = y[:, 2 * m + len(dyn.work_names) + j]
+        forces[f"normal_{name}"] = normal[:, j]
+        forces[f"friction_{name}"] = tangential[:, j]
+        forces[f"stick_{name}"] = stick[:, j]
     meta = {"coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
             "has_potential": eom.potential_energy is not None}
-    return SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, {}, {}, meta)
+    return SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, forces, {}, meta)

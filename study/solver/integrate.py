@@ -126,6 +126,7 @@ def integrate(
     indicators: Callable[[float, Array], Array] | None = None,
     post_step: Callable[[Array], tuple[Array, bool]] | None = None,
     progress: Callable[[float], None] | None = None,
+    switching=None,
 ) -> Trajectory:
     """Integrate y' = rhs(t, y, mode) from t0 to t_end and sample it at ``t_out``.
 
@@ -139,6 +140,15 @@ def integrate(
         between located zero crossings.
     post_step : callable y -> (y, changed), optional
         Correction after every accepted step (projection). Only for methods in ``PROJECTABLE``.
+    switching : object, optional
+        A switching rule whose modes are more than the indicators' signs (stick/slip friction,
+        ``study.solver.friction.StickSlipSwitching``); use it instead of ``indicators``. It provides
+
+        1. ``initial_mode(t0, y0) -> tuple`` of +-1;
+        2. ``indicators(t, y, mode) -> (k,)`` whose signs equal ``mode`` while that mode holds;
+        3. ``on_event(t, y, mode, i) -> tuple``, the mode after indicator ``i`` crossed zero at (t, y).
+
+        Without it, the mode is the indicators' signs and a crossing flips the crossing entry.
     """
     if method not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}; valid choices: {', '.join(INTEGRATORS)}")
@@ -146,7 +156,15 @@ def integrate(
         raise ValueError(f"post-step projection needs an integrator whose state can be replaced between steps "
                          f"({', '.join(PROJECTABLE)}); got {method!r}")
     cls = INTEGRATORS[method]
-    mode = initial_mode(indicators, t0, y0, rhs)
+    if switching is not None:
+        if indicators is not None:
+            raise ValueError("give either indicators or switching, not both (a switching rule has its own indicators)")
+        mode = tuple(switching.initial_mode(t0, np.array(y0, dtype=float)))
+
+        def indicators(tt, yy):  # the current mode is read when called, so it follows every switch
+            return switching.indicators(tt, yy, mode)
+    else:
+        mode = initial_mode(indicators, t0, y0, rhs)
     t_out = np.asarray(t_out, dtype=float)
     samples_t, samples_y, modes = [], [], []
     k_out = 0
@@ -193,9 +211,12 @@ def integrate(
                     sample(dense, t_old, t_e, False)
                     y_cur = dense(t_e)
                     t = t_e
-                    new_mode = list(mode)
-                    new_mode[i_e] = -new_mode[i_e]
-                    mode = tuple(new_mode)
+                    if switching is not None:
+                        mode = tuple(switching.on_event(t_e, y_cur, mode, i_e))
+                    else:
+                        new_mode = list(mode)
+                        new_mode[i_e] = -new_mode[i_e]
+                        mode = tuple(new_mode)
                     traj.events.append({"t": t_e, "indicator": i_e, "new_sign": mode[i_e]})
                     if len(traj.events) > MAX_EVENTS:
                         raise RuntimeError(f"more than {MAX_EVENTS} switches by t = {t_e:.9g}: the solution chatters "
