@@ -63,6 +63,19 @@ def _sliding_mode(args: argparse.Namespace) -> int:
     return 0
 
 
+def _slider_crank(args: argparse.Namespace) -> int:
+    from study.model.compile import cache_dir
+    from study.studies.slider_crank import run_study
+
+    summary = run_study(cache_dir() / "results" / "slider_crank")
+    path = args.out / "tables" / "slider_crank_summary.csv"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # CPU time is machine-dependent; it stays in each saved result's JSON, not in the compared table
+    summary.drop(columns=["cpu_seconds"]).to_csv(path, index=False, float_format="%.6g")
+    print(f"wrote {path}")
+    return 0
+
+
 def _report(args: argparse.Namespace) -> int:
     from study.model.compile import cache_dir
     from study.report import build_report
@@ -72,7 +85,7 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    for step in (_initial, _errata, _sliding_mode, _report):
+    for step in (_initial, _errata, _sliding_mode, _slider_crank, _report):
         code = step(args)
         if code:
             return code
@@ -92,6 +105,9 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
         p.set_defaults(func=func)
+    p = sub.add_parser("slider-crank", help="000's slider-crank with Coulomb friction: variants x treatments")
+    p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
+    p.set_defaults(func=_slider_crank)
     p = sub.add_parser("sliding-mode", help="001's drift claims over methods, sgn approximations and integrators")
     p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
     p.set_defaults(func=_sliding_mode)
