@@ -133,15 +133,6 @@ def _meta_mismatches(options: dict, meta: dict) -> list[str]:
     return bad
 
 
-def _display_path(path: Path) -> str:
-    """A path relative to the working directory when it lies below it, so the report does not
-    depend on where the repository was cloned."""
-    try:
-        return str(path.resolve().relative_to(Path.cwd().resolve()))
-    except ValueError:
-        return str(path)
-
-
 def find_runs_folder(cache_dir: Path) -> tuple[Path | None, list[Path]]:
     """Where the study's runs are saved: ``<cache>/results/sliding_mode`` (``python -m study
     sliding-mode``) or ``<cache>/sliding_mode`` (``run_study(out, cache=<cache>)``).
@@ -454,7 +445,7 @@ def _sliding_mode_section(runs: SlidingModeRuns, runs_table: SavedTable | None, 
                   "Figures are skipped.", ""]
     else:
         expected = len(runs.results) + len(runs.missing)
-        lines += [f"Saved runs: {len(runs.results)} of {expected} found in `{_display_path(runs.folder)}`"
+        lines += [f"Saved runs: {len(runs.results)} of {expected} found in `{_display_path(runs.folder, Path.cwd())}`"
                   + (" (reference included)." if runs.reference is not None else "; **the reference run is missing**.")]
         if runs.reference is not None:
             ref = runs.reference.meta
