@@ -48,6 +48,8 @@ from exudyn.itemInterface import (
     SensorObject,
 )
 
+from study.results import SimulationResult, package_versions
+
 OVT = exu.OutputVariableType
 Array = np.ndarray
 
@@ -500,3 +502,56 @@ def cumulative_trapezoid(y: Array, t: Array) -> Array:
 WORK_NOTE = ("work_<load> = trapezoidal integral of the load's power sampled at every solver step (then "
              "sampled at the output times): error <= t_end h^2 max|P''| / 12 for smooth power, O(h) "
              "locally at a jump of a discontinuous load (on/off cutting law)")
+
+
+def body_energies(bodies: dict[str, tuple[float, float]], pos: dict[str, Array], vel: dict[str, Array],
+                  g: float) -> tuple[Array, Array]:
+    """Kinetic and gravity potential energy from body states; ``bodies`` maps name -> (mass, inertia)."""
+    kinetic = sum(0.5 * m * (vel[b][:, 0] ** 2 + vel[b][:, 1] ** 2) + 0.5 * J * vel[b][:, 2] ** 2
+                  for b, (m, J) in bodies.items())
+    potential = g * sum(m * pos[b][:, 1] for b, (m, _) in bodies.items())
+    return kinetic, potential
+
+
+def assemble_result(eom, ps, grid: RunGrid, solver: str, eps: float, friction: str, *, t: Array, q: Array,
+                    qd: Array, qdd: Array, lam: Array, kinetic: Array, potential: Array,
+                    works: dict[str, Array], forces: dict[str, Array], stats: dict, meta: dict):
+    """The study's SimulationResult from per-step Exudyn series, sampled at the output times.
+
+    Phi and Phidot are the in-house ones evaluated on Exudyn's q; work is integrated from the
+    loads' power (see ``WORK_NOTE``). ``meta`` adds the mechanism-specific entries.
+    """
+    energies = {"kinetic": kinetic, "potential": potential}
+    for name, power in works.items():
+        energies[f"work_{name}"] = cumulative_trapezoid(power, t)
+    idx = grid.output_indices
+    phi = np.array([eom.phi(qi) for qi in q[idx]])
+    phidot = np.array([eom.phi_q(qi) @ qdi for qi, qdi in zip(q[idx], qd[idx])])
+    common_meta = {
+        "engine": "exudyn",
+        "exudyn_version": exudyn_version(),
+        "method": f"exudyn_{solver}",
+        "solver": solver,
+        "solver_description": SOLVER_DESCRIPTIONS[solver],
+        "h": grid.h,
+        "t_end": grid.t_end,
+        "output_step": grid.h * grid.stride,
+        "eps": eps,
+        "friction": friction,
+        "mechanism": ps.mechanism,
+        "variant": ps.variant,
+        "parameter_hash": ps.sha256,
+        "coordinate_names": list(eom.coordinate_names),
+        "constraint_names": list(eom.constraint_names),
+        "newton_tolerance": NEWTON_TOLERANCE,
+        "spectral_radius": SPECTRAL_RADIUS if solver == "index3" else None,
+        "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
+        "work_integration": WORK_NOTE,
+        "versions": package_versions(),
+    }
+    return SimulationResult(
+        t=t[idx], q=q[idx], qd=qd[idx], qdd=qdd[idx], lam=lam[idx], phi=phi, phidot=phidot,
+        energies={k: val[idx] for k, val in energies.items()},
+        forces={k: np.asarray(val, dtype=float)[idx] for k, val in forces.items()},
+        stats=stats, meta={**common_meta, **meta},
+    )

@@ -42,7 +42,7 @@ from study.exudyn_models import common
 from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard, unit, unit_normal
 from study.mechanisms.quick_return import cutting_law
 from study.params import ParameterSet
-from study.results import SimulationResult, package_versions
+from study.results import SimulationResult
 
 MECHANISM = "quick_return"
 BODIES = ("crank", "rocker", "rod", "block", "ram")
@@ -230,37 +230,10 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
 
     masses = {"crank": (v.m1, v.J1), "rocker": (v.m2, v.J2), "rod": (v.m3, v.J3), "block": (v.m4, v.J4),
               "ram": (v.m5, v.J5)}
-    kinetic = sum(0.5 * m * (vel[b][:, 0] ** 2 + vel[b][:, 1] ** 2) + 0.5 * J * vel[b][:, 2] ** 2
-                  for b, (m, J) in masses.items())
-    potential = v.g * sum(m * pos[b][:, 1] for b, (m, _) in masses.items())
-    energies = {"kinetic": kinetic, "potential": potential}
-    for name, power in works.items():
-        energies[f"work_{name}"] = common.cumulative_trapezoid(power, t)
-
-    idx = grid.output_indices
-    phi = np.array([eom.phi(qi) for qi in q[idx]])
-    phidot = np.array([eom.phi_q(qi) @ qdi for qi, qdi in zip(q[idx], qd[idx])])
+    kinetic, potential = common.body_energies(masses, pos, vel, v.g)
     meta = {
-        "engine": "exudyn",
-        "exudyn_version": common.exudyn_version(),
-        "method": f"exudyn_{solver}",
-        "solver": solver,
-        "solver_description": common.SOLVER_DESCRIPTIONS[solver],
-        "h": grid.h,
-        "t_end": grid.t_end,
-        "output_step": grid.h * grid.stride,
-        "eps": eps,
-        "friction": friction if v.mu_guide > 0 else "none (mu_guide = 0)",
-        "mechanism": MECHANISM,
-        "variant": ps.variant,
-        "parameter_hash": ps.sha256,
-        "coordinate_names": list(eom.coordinate_names),
-        "constraint_names": list(eom.constraint_names),
-        "newton_tolerance": common.NEWTON_TOLERANCE,
-        "spectral_radius": common.SPECTRAL_RADIUS if solver == "index3" else None,
         "loads_jacobian": loads_jacobian(ps, friction),
         "cutting_law": v.cutting_law,
-        "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
         "lam_mapping": "lam1 = ForceLocal_y of PrismaticJoint2D 'block_on_rocker' (force on the rocker, rocker "
                        "frame, y = rocker normal); lam2 = -ForceLocal_y of 'ram_guide' (force on the ground, "
                        "global frame)",
@@ -275,12 +248,8 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
             "joint_<J>_x/_y": "global force of revolute joint J on its distal body "
                               "(O: crank, P: rocker, A: block, E: rod, D: ram)",
         },
-        "work_integration": common.WORK_NOTE,
-        "versions": package_versions(),
     }
-    return SimulationResult(
-        t=t[idx], q=q[idx], qd=qd[idx], qdd=qdd[idx], lam=lam[idx], phi=phi, phidot=phidot,
-        energies={k: val[idx] for k, val in energies.items()},
-        forces={k: np.asarray(val, dtype=float)[idx] for k, val in forces.items()},
-        stats=stats, meta=meta,
-    )
+    return common.assemble_result(eom, ps, grid, solver, eps,
+                                  friction if v.mu_guide > 0 else "none (mu_guide = 0)", t=t, q=q, qd=qd,
+                                  qdd=qdd, lam=lam, kinetic=kinetic, potential=potential, works=works,
+                                  forces=forces, stats=stats, meta=meta)

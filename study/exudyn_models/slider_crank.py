@@ -41,7 +41,7 @@ from study import mechanisms
 from study.exudyn_models import common
 from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard, unit, unit_normal
 from study.params import ParameterSet
-from study.results import SimulationResult, package_versions
+from study.results import SimulationResult
 
 MECHANISM = "slider_crank"
 BODIES = ("crank", "rod", "slider")
@@ -208,9 +208,8 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
         f = -model.series((joint, "force"), grid)
         forces[f"joint_{joint}_x"], forces[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
 
-    kinetic = sum(0.5 * m * (vel[b][:, 0] ** 2 + vel[b][:, 1] ** 2) + 0.5 * J * vel[b][:, 2] ** 2
-                  for b, m, J in (("crank", v.m1, v.J1), ("rod", v.m2, v.J2), ("slider", v.m3, v.J3)))
-    potential = v.g * (v.m1 * pos["crank"][:, 1] + v.m2 * pos["rod"][:, 1] + v.m3 * pos["slider"][:, 1])
+    bodies = {"crank": (v.m1, v.J1), "rod": (v.m2, v.J2), "slider": (v.m3, v.J3)}
+    kinetic, potential = common.body_energies(bodies, pos, vel, v.g)
     w1 = vel["crank"][:, 2]
     works = {"drive": v.M * w1}
     if v.alpha_law == "spring":
@@ -218,32 +217,7 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
     else:
         works["alpha_damper"] = -v.alpha * w1 ** 2
     works["friction_guide"] = (coulomb + resistance) * vel["slider"][:, 0]
-    energies = {"kinetic": kinetic, "potential": potential}
-    for name, power in works.items():
-        energies[f"work_{name}"] = common.cumulative_trapezoid(power, t)
-
-    idx = grid.output_indices
-    phi = np.array([eom.phi(qi) for qi in q[idx]])
-    phidot = np.array([eom.phi_q(qi) @ qdi for qi, qdi in zip(q[idx], qd[idx])])
     meta = {
-        "engine": "exudyn",
-        "exudyn_version": common.exudyn_version(),
-        "method": f"exudyn_{solver}",
-        "solver": solver,
-        "solver_description": common.SOLVER_DESCRIPTIONS[solver],
-        "h": grid.h,
-        "t_end": grid.t_end,
-        "output_step": grid.h * grid.stride,
-        "eps": eps,
-        "friction": friction,
-        "mechanism": MECHANISM,
-        "variant": ps.variant,
-        "parameter_hash": ps.sha256,
-        "coordinate_names": list(eom.coordinate_names),
-        "constraint_names": list(eom.constraint_names),
-        "newton_tolerance": common.NEWTON_TOLERANCE,
-        "spectral_radius": common.SPECTRAL_RADIUS if solver == "index3" else None,
-        "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
         "lam_mapping": "lam1 = ForceLocal_y of the PrismaticJoint2D 'guide' (force on the ground, global frame) "
                        "= -(normal force on the slider along +y)",
         "reaction_reading": "hybrid guard: live Newton iterate of the guide reaction, last accepted value "
@@ -255,13 +229,8 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
             "resistance_guide": "resistance on the slider along +x, -F tanh(v_B/eps)",
             "joint_<J>_x/_y": "global force of revolute joint J on its distal body (O: crank, A: rod, B: slider)",
         },
-        "work_integration": common.WORK_NOTE,
         "work_friction_guide": "Coulomb plus resistance (the whole tangential guide force)",
-        "versions": package_versions(),
     }
-    return SimulationResult(
-        t=t[idx], q=q[idx], qd=qd[idx], qdd=qdd[idx], lam=lam[idx], phi=phi, phidot=phidot,
-        energies={k: val[idx] for k, val in energies.items()},
-        forces={k: np.asarray(val, dtype=float)[idx] for k, val in forces.items()},
-        stats=stats, meta=meta,
-    )
+    return common.assemble_result(eom, ps, grid, solver, eps, friction, t=t, q=q, qd=qd, qdd=qdd, lam=lam,
+                                  kinetic=kinetic, potential=potential, works=works, forces=forces,
+                                  stats=stats, meta=meta)
