@@ -15,6 +15,7 @@ import numpy as np
 import sympy as sp
 
 from study.model import EquationsOfMotion, MechanismBuilder
+from study.model.builder import constant_torque
 from study.params import ParameterSet
 
 COORDINATES = ("q1", "q2", "q3")
@@ -60,12 +61,6 @@ def cutting_law(ps: ParameterSet) -> CuttingLaw:
     return CuttingLaw(v.F_cut, v.x_cut_min, v.x_cut_max, v.cutting_law, v.v_ramp, v.x_ramp)
 
 
-def _constant(value: float):
-    def law(t, angle, rate):
-        return value
-    return law
-
-
 def describe(ps: ParameterSet) -> MechanismBuilder:
     """The body-level description of the quick-return mechanism for one parameter set."""
     v = ps.values
@@ -91,7 +86,7 @@ def describe(ps: ParameterSet) -> MechanismBuilder:
     # D on the ram guide y = h2, written as 001's f2 = h2 - y_D (normal (0, -1)).
     b.sliding_contact("ram_guide", ram_point, normal=(0, -1), offset=-p.h2, tangent=(1, 0),
                       mu_static=p.mu_guide, mu_kinetic=p.mu_guide)
-    b.torque("drive", crank, _constant(v.M))
+    b.torque("drive", crank, constant_torque(v.M))
     law = cutting_law(ps)
     if v.cutting_law == "on_off":
         b.force("cutting", ram_point, law, law.indicators, ("v_D", "x_D-x_min", "x_max-x_D"))

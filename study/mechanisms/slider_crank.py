@@ -14,15 +14,10 @@ import numpy as np
 import sympy as sp
 
 from study.model import EquationsOfMotion, MechanismBuilder
+from study.model.builder import constant_torque
 from study.params import ParameterSet
 
 COORDINATES = ("q1", "q2")
-
-
-def _constant(value: float):
-    def law(t, angle, rate):
-        return value
-    return law
 
 
 def _damper(alpha: float):
@@ -49,7 +44,7 @@ def describe(ps: ParameterSet) -> MechanismBuilder:
     b.gravity(p.g)
     b.sliding_contact("guide", slider_point, normal=(0, 1), offset=0, tangent=(1, 0),
                       mu_static=p.mu, mu_kinetic=p.mu, resistance=p.F)
-    b.torque("drive", crank, _constant(v.M))
+    b.torque("drive", crank, constant_torque(v.M))
     if v.alpha_law == "spring":
         b.potential("alpha_spring", p.alpha * q1 ** 2 / 2)
     else:

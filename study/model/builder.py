@@ -78,6 +78,13 @@ class Contact:
     resistance: Expr
 
 
+def constant_torque(value: float) -> Callable[[float, float, float], float]:
+    """A torque law ``law(t, angle, rate) -> value`` for :meth:`MechanismBuilder.torque`."""
+    def law(t: float, angle: float, rate: float) -> float:
+        return value
+    return law
+
+
 class DescriptionError(ValueError):
     """The mechanism description is inconsistent; the message lists every problem."""
 

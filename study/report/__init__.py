@@ -63,9 +63,7 @@ class SavedTable:
 class SlidingModeRuns:
     """The saved runs of the sliding-mode study found in the cache.
 
-    ``notes`` lists what a reader should know about the match between files and the study's cases
-    (runs found only under an older name, ambiguous or mismatching files); ``ignored`` the files
-    that were not used.
+    ``ignored`` lists saved files in the folder that belong to no current case (stale inputs).
     """
 
     folder: Path | None
@@ -75,8 +73,6 @@ class SlidingModeRuns:
     results: dict[tuple[str, str], SimulationResult] = field(default_factory=dict)
     paths: dict[tuple[str, str], Path] = field(default_factory=dict)
     missing: list[tuple[str, str]] = field(default_factory=list)
-    renamed: list[tuple[str, str]] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
     ignored: list[str] = field(default_factory=list)
 
     @property
@@ -116,44 +112,19 @@ def saved_run_stem(setting: str, method: str, options: dict) -> str:
     return sm.run_name(setting, method, options, sm.T_END)
 
 
-def _readable(stem: str) -> str:
-    """'<setting>__<method>' part of a saved run's name (drops an appended input hash)."""
-    return "__".join(stem.split("__")[:2])
-
-
-def _meta_mismatches(options: dict, meta: dict) -> list[str]:
-    """Options of a case that a saved run's metadata contradicts ('method' is saved as 'stabilization')."""
-    bad = []
-    for key, want in sorted(options.items()):
-        got = meta.get("stabilization" if key == "method" else key, want)
-        same = (np.isclose(float(got), float(want), rtol=1e-12, atol=0.0)
-                if isinstance(want, (int, float)) and isinstance(got, (int, float)) else got == want)
-        if not same:
-            bad.append(f"{key}: saved {got!r}, case {want!r}")
-    return bad
-
-
 def find_runs_folder(cache_dir: Path) -> tuple[Path | None, list[Path]]:
-    """Where the study's runs are saved: ``<cache>/results/sliding_mode`` (``python -m study
-    sliding-mode``) or ``<cache>/sliding_mode`` (``run_study(out, cache=<cache>)``).
+    """Where ``python -m study sliding-mode`` saves its runs: ``<cache>/results/sliding_mode``.
 
-    Returns the first folder holding a reference run (else the first holding any run, else
-    None) and the folders searched.
+    Returns that folder if it holds any run (else None) and the folders searched.
     """
-    candidates = [cache_dir / "results" / "sliding_mode", cache_dir / "sliding_mode"]
-    for marker in ("reference__reference*.json", "*.json"):
-        for folder in candidates:
-            if folder.is_dir() and any(folder.glob(marker)):
-                return folder, candidates
-    return None, candidates
+    folder = cache_dir / "results" / "sliding_mode"
+    return (folder if folder.is_dir() and any(folder.glob("*.json")) else None), [folder]
 
 
 def load_sliding_mode_runs(cache_dir: Path) -> SlidingModeRuns:
     """Load the saved run of every case of the study (and of the reference) that exists.
 
-    A case's run is the file named as the study names it now. If there is none, a single file
-    with the same readable '<setting>__<method>' part whose metadata agrees with the case's options
-    is used (made under an older naming or horizon) and reported in ``renamed``.
+    A case's run is the file named by :func:`saved_run_stem` (its name hashes the case's inputs).
     """
     settings, methods = _study_order()
     folder, searched = find_runs_folder(cache_dir)
@@ -161,31 +132,10 @@ def load_sliding_mode_runs(cache_dir: Path) -> SlidingModeRuns:
     if folder is None:
         return runs
     stems = sorted(p.stem for p in folder.glob("*.json") if p.with_suffix(".csv").exists())
-    by_readable: dict[str, list[str]] = {}
-    for stem in stems:
-        by_readable.setdefault(_readable(stem), []).append(stem)
     used = set()
     for setting, method, options in _study_cases():
-        key, exact = (setting, method), saved_run_stem(setting, method, options)
-        chosen = exact if exact in stems else None
-        if chosen is None:
-            fitting = []
-            for stem in by_readable.get(_readable(exact), []):
-                meta = json.loads((folder / f"{stem}.json").read_text()).get("meta", {})
-                problems = _meta_mismatches(options, meta)
-                if problems:
-                    runs.notes.append(f"`{stem}` has the name of {setting} / {method} but not its options "
-                                      f"({'; '.join(problems)}); not used.")
-                else:
-                    fitting.append(stem)
-            if len(fitting) == 1:
-                chosen = fitting[0]
-                runs.renamed.append(key)
-            elif len(fitting) > 1:
-                runs.notes.append(f"{setting} / {method}: {len(fitting)} candidate files "
-                                  f"({', '.join(f'`{s}`' for s in fitting)}) and none named as the study names "
-                                  "it now; not used.")
-        if chosen is None:
+        key, chosen = (setting, method), saved_run_stem(setting, method, options)
+        if chosen not in stems:
             runs.missing.append(key)
             continue
         runs.results[key] = SimulationResult.load(folder / chosen)
@@ -495,12 +445,6 @@ def _data_checks(runs: SlidingModeRuns, runs_table: SavedTable | None) -> list[s
     lines = ["### Checks of the saved data", ""]
     if runs.missing:
         lines.append("- Missing runs: " + ", ".join(f"{s} / {m}" for s, m in runs.missing) + ".")
-    if runs.renamed:
-        lines.append(f"- {len(runs.renamed)} runs were found only under another name than the study gives them "
-                     "now (an older naming, or another horizon or parameter set); their metadata agrees with the "
-                     "case's options, so they are used: "
-                     + ", ".join(f"{s} / {m}" for s, m in runs.renamed) + ".")
-    lines += [f"- {note}" for note in runs.notes]
     if runs.ignored:
         shown = runs.ignored[:MAX_LISTED]
         lines.append(f"- {len(runs.ignored)} saved runs in the folder are not used (stale names or not in the "
@@ -602,8 +546,7 @@ def build_report(reports_dir: Path, cache_dir: Path) -> Path:
     ----------
     reports_dir : the report folder; tables are read from ``<reports_dir>/tables``, and
         ``figures/``, ``index.md``, ``report.html`` and ``manifest.json`` are written into it.
-    cache_dir : the cache root holding the saved runs (``<cache>/results/sliding_mode`` or
-        ``<cache>/sliding_mode``, see :func:`find_runs_folder`).
+    cache_dir : the cache root holding the saved runs (``<cache>/results/sliding_mode``).
     """
     reports_dir, cache_dir = Path(reports_dir), Path(cache_dir)
     if reports_dir.exists() and not reports_dir.is_dir():
