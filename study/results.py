@@ -131,8 +131,8 @@ class SimulationResult:
             "meta": self.meta,
         }
         csv_text = self.to_dataframe().to_csv(index=False, float_format="%.17g")
-        _atomic_write(base.with_suffix(".csv"), csv_text)
-        _atomic_write(base.with_suffix(".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
+        atomic_write(base.with_suffix(".csv"), csv_text)
+        atomic_write(base.with_suffix(".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
         return base.with_suffix(".csv")
 
     @classmethod
@@ -164,7 +164,7 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
-def _atomic_write(path: Path, text: str) -> None:
+def atomic_write(path: Path, text: str) -> None:
     """Write to a temporary file in the same folder, then rename: readers never see half a file."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     with os.fdopen(fd, "w") as fh:

@@ -1,0 +1,523 @@
+"""The study's cases as data, run through an on-disk cache keyed by everything that affects them.
+
+A *case list* is a TOML file ``reference/cases/<study>.toml``::
+
+    [study]
+    description = "what the study asks"
+    summary = "study.studies.sliding_mode"      # module with summarize(cases, load) -> {table: DataFrame}
+
+    [[group]]
+    name = "reference"                          # readable, unique within the study
+    engine = "inhouse"                          # or "exudyn"
+    mechanism = "quick_return"
+    variant = "seed"
+    t_end = 20.0
+    options = { integrator = "DOP853", rtol = 1e-12, method = "projection" }
+    # optional: the cartesian product of these lists; a list entry that is a table is merged into
+    # the options (its 'label' names it), a scalar sets the option of that name. The keys 'variant',
+    # 'mechanism' and 't_end' set those fields instead of an option.
+    sweep = { omega = [1.0, 10.0], d = [0.5, 1.0] }
+    # optional: drop the combinations whose options contain all entries of one of these tables
+    exclude = [ { integrator = "LSODA", method = "projection" } ]
+
+Options are the keyword arguments of :func:`study.simulate.simulate` (engine 'inhouse'; plus
+``initial = "printed"`` to start from the paper's printed state instead of the consistent one) or of
+:func:`study.exudyn_models.run` (engine 'exudyn', e.g. ``h``, ``solver``).
+
+A case's key hashes its specification, the SHA-256 of its parameter set, the source of the code
+that computes it (model, solver, mechanisms, and the Exudyn models for that engine) and the versions
+of the numerical packages. :class:`Store` keeps one saved result per key; :func:`run_cases` runs
+whatever is not stored yet on an executor (a local process pool, or a Dask cluster), saves each
+result as it arrives (atomically: an interrupted run leaves no half-written result and resumes
+where it stopped) and records failed cases with their error without stopping the others.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import importlib
+import itertools
+import json
+import os
+import re
+import sys
+import time
+import tomllib
+import traceback
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Callable, Iterable, Iterator, Mapping
+
+import pandas as pd
+
+from study.params import REFERENCE_DIR, load_parameters
+from study.results import SimulationResult, atomic_write, package_versions
+
+CASES_DIR = REFERENCE_DIR / "cases"
+ENGINES = ("inhouse", "exudyn")
+PACKAGE_ROOT = Path(__file__).resolve().parent
+# Source that determines a case's result, per engine (folders or files under study/). The report,
+# the studies' summaries and the command line do not change a result and are left out.
+_COMMON_CODE = ("model", "solver", "mechanisms", "params.py", "results.py", "reference_data.py")
+CODE_PATHS = {
+    "inhouse": _COMMON_CODE + ("simulate.py", "fast"),
+    "exudyn": _COMMON_CODE + ("exudyn_models",),
+}
+NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
+_GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude"}
+_FIELD_SWEEPS = ("mechanism", "variant", "t_end")
+
+
+class CaseListError(ValueError):
+    """A case list is malformed; the message names the file, the group and the value."""
+
+
+# --- cases ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Case:
+    """One run: mechanism x variant x engine x options, within a named study and group.
+
+    ``options`` and ``labels`` are sorted tuples of (name, value) so a case is hashable; use
+    :attr:`kwargs` and :meth:`label` to read them.
+    """
+
+    study: str
+    group: str
+    engine: str
+    mechanism: str
+    variant: str
+    t_end: float
+    options: tuple[tuple[str, Any], ...] = ()
+    labels: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def kwargs(self) -> dict[str, Any]:
+        return dict(self.options)
+
+    def label(self, key: str, default: str | None = None) -> str | None:
+        return dict(self.labels).get(key, default)
+
+    @property
+    def name(self) -> str:
+        """Readable name: study/group[label, ...]."""
+        inner = ", ".join(f"{k}={v}" for k, v in self.labels)
+        return f"{self.study}/{self.group}" + (f" [{inner}]" if inner else "")
+
+    def spec(self) -> dict[str, Any]:
+        return {"study": self.study, "group": self.group, "engine": self.engine, "mechanism": self.mechanism,
+                "variant": self.variant, "t_end": self.t_end, "options": self.kwargs}
+
+    def key(self) -> str:
+        """Hash of everything that affects the result (the study and group names do not)."""
+        payload = {
+            "engine": self.engine, "mechanism": self.mechanism, "variant": self.variant, "t_end": self.t_end,
+            "options": self.kwargs, "parameters": _parameter_hash(self.mechanism, self.variant),
+            "code": code_version(self.engine),
+        }
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+    def matches(self, **criteria) -> bool:
+        """True if every criterion equals the field, the option or the label of that name."""
+        fields, options, labels = vars(self), self.kwargs, dict(self.labels)
+        for k, v in criteria.items():
+            if k in ("study", "group", "engine", "mechanism", "variant", "t_end"):
+                if fields[k] != v:
+                    return False
+            elif k in options:
+                if options[k] != v:
+                    return False
+            elif labels.get(k) != v:
+                return False
+        return True
+
+
+def find(cases: Iterable[Case], **criteria) -> list[Case]:
+    """The cases matching every criterion (fields, options or labels), in list order."""
+    return [c for c in cases if c.matches(**criteria)]
+
+
+def find_one(cases: Iterable[Case], **criteria) -> Case:
+    """The single case matching the criteria; a LookupError names the criteria otherwise."""
+    found = find(cases, **criteria)
+    if len(found) != 1:
+        raise LookupError(f"{len(found)} cases match {criteria} (expected exactly one)")
+    return found[0]
+
+
+@lru_cache(maxsize=None)
+def _parameter_hash(mechanism: str, variant: str) -> str:
+    return load_parameters(mechanism, variant).sha256
+
+
+@lru_cache(maxsize=None)
+def code_version(engine: str) -> str:
+    """SHA-256 (16 hex) of the source files that compute a result of ``engine`` + numeric package versions."""
+    h = hashlib.sha256()
+    for rel in CODE_PATHS[engine]:
+        path = PACKAGE_ROOT / rel
+        files = sorted(path.rglob("*.py")) if path.is_dir() else [path] if path.exists() else []
+        for f in files:
+            h.update(str(f.relative_to(PACKAGE_ROOT)).encode())
+            h.update(f.read_bytes())
+    versions = package_versions()
+    h.update(json.dumps({p: versions.get(p) for p in NUMERIC_PACKAGES[engine]}, sort_keys=True).encode())
+    return h.hexdigest()[:16]
+
+
+# --- case lists ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class CaseList:
+    """A study's case list: its cases and the module that summarizes them."""
+
+    study: str
+    description: str
+    summary: str
+    cases: tuple[Case, ...]
+    path: Path
+
+
+def _label(value: Any) -> str:
+    if isinstance(value, Mapping):
+        return str(value.get("label") or ",".join(f"{k}={v}" for k, v in value.items()))
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
+    unknown = set(g) - _GROUP_KEYS
+    if unknown:
+        raise CaseListError(f"{where}: unknown keys {sorted(unknown)}; valid: {sorted(_GROUP_KEYS)}")
+    fields = {"mechanism": g.get("mechanism"), "variant": g.get("variant", "seed"), "t_end": g.get("t_end")}
+    engine = g.get("engine", "inhouse")
+    if engine not in ENGINES:
+        raise CaseListError(f"{where}: engine = {engine!r} is not one of {ENGINES}")
+    sweep = g.get("sweep", {})
+    for k, values in sweep.items():
+        if not isinstance(values, list) or not values:
+            raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
+    cases = []
+    for combo in itertools.product(*sweep.values()) if sweep else [()]:
+        case_fields, options, labels = dict(fields), dict(g.get("options", {})), []
+        for k, v in zip(sweep, combo):
+            if isinstance(v, Mapping):
+                options.update({kk: vv for kk, vv in v.items() if kk != "label"})
+            elif k in _FIELD_SWEEPS:
+                case_fields[k] = v
+            else:
+                options[k] = v
+            labels.append((k, _label(v)))
+        if any(all(options.get(k) == v for k, v in rule.items()) for rule in g.get("exclude", [])):
+            continue
+        if case_fields["mechanism"] is None or case_fields["t_end"] is None:
+            raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
+        t_end = case_fields["t_end"]
+        if not isinstance(t_end, (int, float)) or not t_end > 0:
+            raise CaseListError(f"{where}: t_end = {t_end!r} must be a number > 0 [s]")
+        cases.append(Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"],
+                          float(t_end), tuple(sorted(options.items())), tuple(labels)))
+    return cases
+
+
+def load_case_list(path: Path) -> CaseList:
+    """Parse and expand one case list (CaseListError names the file and group of any problem)."""
+    path = Path(path)
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    study = path.stem
+    head = data.get("study", {})
+    if "summary" not in head:
+        raise CaseListError(f"{path}: [study] needs 'summary' (the module with summarize())")
+    groups = data.get("group", [])
+    if not groups:
+        raise CaseListError(f"{path}: no [[group]] entries")
+    names = [g.get("name") for g in groups]
+    if None in names or len(set(names)) != len(names):
+        raise CaseListError(f"{path}: every group needs a unique 'name'; got {names}")
+    cases = []
+    for g in groups:
+        cases += _expand_group(study, g, f"{path.name} group {g['name']!r}")
+    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path)
+
+
+def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:
+    """Every case list in ``folder`` (sorted by name), or only the named studies."""
+    available = {p.stem: p for p in sorted(Path(folder).glob("*.toml"))}
+    chosen = list(available) if studies is None else list(studies)
+    missing = [s for s in chosen if s not in available]
+    if missing:
+        raise CaseListError(f"no case list for {missing} in {folder}; available: {', '.join(available)}")
+    return [load_case_list(available[s]) for s in chosen]
+
+
+# --- running one case ----------------------------------------------------------------------------
+def run_case(case: Case) -> SimulationResult:
+    """Compute one case (in whatever process the executor chose)."""
+    if case.engine == "inhouse":
+        from study.simulate import simulate
+
+        options = case.kwargs
+        initial = options.pop("initial", "consistent")
+        if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
+            ps = load_parameters(case.mechanism, case.variant)
+            options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd))
+        elif initial != "consistent":
+            raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
+        return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
+    from study import exudyn_models
+
+    options = case.kwargs
+    h = options.pop("h")
+    return exudyn_models.run(load_parameters(case.mechanism, case.variant), case.t_end, h, **options)
+
+
+def _run_case_timed(case: Case) -> tuple[SimulationResult, float]:
+    t0 = time.perf_counter()
+    result = run_case(case)
+    return result, time.perf_counter() - t0
+
+
+# --- the cache -----------------------------------------------------------------------------------
+class Store:
+    """Saved results under ``root/<study>/<readable>__<key>.{csv,json}``; failures as ``.failed.json``."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+
+    def base(self, case: Case) -> Path:
+        readable = re.sub(r"[^A-Za-z0-9.+-]+", "_", f"{case.group}__{'_'.join(v for _, v in case.labels)}")
+        return self.root / case.study / f"{readable.strip('_')[:80]}__{case.key()}"
+
+    def has(self, case: Case) -> bool:
+        return self.base(case).with_suffix(".json").exists()  # the JSON is written last
+
+    def load(self, case: Case) -> SimulationResult:
+        if not self.has(case):
+            failure = self.failure(case)
+            why = f"it failed: {failure['error']}" if failure else "it has not been run"
+            raise LookupError(f"no saved result for case {case.name} ({why})")
+        return SimulationResult.load(self.base(case))
+
+    def save(self, case: Case, result: SimulationResult) -> Path:
+        result.meta["case"] = {**case.spec(), "key": case.key(), "labels": dict(case.labels)}
+        path = result.save(self.base(case))
+        self._failure_path(case).unlink(missing_ok=True)
+        return path
+
+    def _failure_path(self, case: Case) -> Path:
+        return self.base(case).with_suffix(".failed.json")
+
+    def record_failure(self, case: Case, error: str, details: str) -> None:
+        path = self._failure_path(case)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(path, json.dumps({"case": case.name, "key": case.key(), "error": error,
+                                        "traceback": details}, indent=1))
+
+    def failure(self, case: Case) -> dict | None:
+        path = self._failure_path(case)
+        return json.loads(path.read_text()) if path.exists() else None
+
+
+# --- executors and progress ----------------------------------------------------------------------
+class InlineExecutor(Executor):
+    """Runs each submitted call at once in this process (workers=1: simple tracebacks, no pickling)."""
+
+    def submit(self, fn, /, *args, **kwargs) -> Future:
+        future: Future = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller through the future
+            if isinstance(exc, KeyboardInterrupt):
+                raise
+            future.set_exception(exc)
+        return future
+
+
+@contextlib.contextmanager
+def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Executor]:
+    """A local process pool with ``workers`` processes, or the Dask cluster at ``scheduler``.
+
+    ``scheduler`` is a Dask scheduler address ('tcp://host:8786') or a ``distributed.Client``.
+    """
+    if scheduler is not None:
+        try:
+            from distributed import Client
+        except ImportError as exc:  # the extra is optional; say how to get it
+            raise RuntimeError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
+        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        try:
+            yield client.get_executor(pure=False)
+        finally:
+            if client is not scheduler:
+                client.close()
+        return
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers = {workers!r} must be an integer >= 1")
+    if workers == 1:
+        yield InlineExecutor()
+        return
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        yield pool
+
+
+class Progress:
+    """One status line on stderr: done / remaining / failed (redrawn on a terminal, else every ~5 %)."""
+
+    def __init__(self, total: int, title: str, stream=None):
+        self.total, self.title = total, title
+        self.done = self.failed = 0
+        self.stream = stream or sys.stderr
+        self.start = time.perf_counter()
+        self._tty = getattr(self.stream, "isatty", lambda: False)()
+        self._last_printed = -1
+
+    def update(self, failed: bool = False) -> None:
+        self.done += 1
+        self.failed += int(failed)
+        step = max(self.total // 20, 1)
+        if self._tty or self.done == self.total or self.done // step != self._last_printed // step:
+            self._last_printed = self.done
+            self._draw()
+
+    def _draw(self) -> None:
+        width = 24
+        filled = int(width * self.done / max(self.total, 1))
+        line = (f"{self.title}: [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} done, "
+                f"{self.total - self.done} remaining, {self.failed} failed, "
+                f"{time.perf_counter() - self.start:.0f} s")
+        end = "" if self._tty and self.done < self.total else "\n"
+        print(("\r" if self._tty else "") + line, end=end, file=self.stream, flush=True)
+
+
+@dataclass
+class RunSummary:
+    """What :func:`run_cases` did: counts, failed cases with their errors, wall time per case."""
+
+    cached: int = 0
+    computed: int = 0
+    failed: dict[str, str] = field(default_factory=dict)
+    wall_seconds: dict[str, float] = field(default_factory=dict)
+
+
+def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
+              stream=None) -> RunSummary:
+    """Run every case without a saved result on ``executor``; save each as it completes.
+
+    Identical cases (same key) run once. A case that raises is recorded (``Store.record_failure``)
+    and the others go on. On KeyboardInterrupt the pending cases are cancelled; finished results
+    stay saved, so a rerun resumes.
+    """
+    unique: dict[str, Case] = {}
+    for case in cases:
+        unique.setdefault(case.key(), case)
+    summary = RunSummary()
+    todo = [c for c in unique.values() if not store.has(c)]
+    summary.cached = len(unique) - len(todo)
+    if not todo:
+        return summary
+    progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
+    futures = {executor.submit(_run_case_timed, case): case for case in todo}
+    try:
+        for future in as_completed(futures):
+            case = futures[future]
+            try:
+                result, wall = future.result()
+            except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
+                error = f"{type(exc).__name__}: {exc}"
+                details = "".join(traceback.format_exception(exc))
+                store.record_failure(case, error, details)
+                summary.failed[case.name] = error
+                progress.update(failed=True)
+                continue
+            store.save(case, result)
+            summary.computed += 1
+            summary.wall_seconds[case.name] = wall
+            progress.update()
+    except KeyboardInterrupt:
+        for future in futures:
+            future.cancel()
+        raise
+    return summary
+
+
+# --- summaries -----------------------------------------------------------------------------------
+TABLE_FLOAT_FORMAT = "%.6g"  # 6 significant digits: the tables compare across runs byte for byte
+
+
+def summarize(case_list: CaseList, store: Store) -> dict[str, pd.DataFrame]:
+    """Call the study's ``summarize(cases, load)`` on its saved results."""
+    module = importlib.import_module(case_list.summary)
+    return module.summarize(list(case_list.cases), store.load)
+
+
+def write_tables(tables: Mapping[str, pd.DataFrame], reports_dir: Path) -> list[Path]:
+    """Write each table to ``tables/<name>.csv``; names ending in ``_timing`` go to ``timing/``.
+
+    Timing (CPU or wall seconds) depends on the machine, so it is kept out of ``tables/``, whose
+    files must be byte-identical between two runs.
+    """
+    written = []
+    for name, frame in tables.items():
+        folder = Path(reports_dir) / ("timing" if name.endswith("_timing") else "tables")
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{name}.csv"
+        atomic_write(path, frame.to_csv(index=False, float_format=TABLE_FLOAT_FORMAT, lineterminator="\n"))
+        written.append(path)
+    return written
+
+
+def failures_table(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
+    """Every case whose last attempt failed, with its error message."""
+    rows = []
+    for cl in case_lists:
+        for case in cl.cases:
+            failure = None if store.has(case) else store.failure(case)
+            if failure is not None:
+                rows.append({"study": cl.study, "case": case.name, "key": case.key(), "error": failure["error"]})
+    return pd.DataFrame(rows, columns=["study", "case", "key", "error"])
+
+
+def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
+                 scheduler: str | None = None, folder: Path = CASES_DIR, stream=None) -> dict[str, Any]:
+    """Run every study's cases (cached ones are reused), then write their tables.
+
+    Returns a record with the wall time per stage, the counts and the failures (for the manifest).
+    """
+    stream = stream or sys.stderr
+    case_lists = load_case_lists(folder, studies)
+    store = Store(Path(cache_root) / "runs")
+    record: dict[str, Any] = {"stages": {}, "studies": {}, "case_keys": {}}
+    t0 = time.perf_counter()
+    with make_executor(workers, scheduler) as executor:
+        for cl in case_lists:
+            ts = time.perf_counter()
+            run = run_cases(cl.cases, store, executor, title=cl.study, stream=stream)
+            record["studies"][cl.study] = {"cases": len(cl.cases), "cached": run.cached, "computed": run.computed,
+                                           "failed": run.failed}
+            record["stages"][f"run:{cl.study}"] = time.perf_counter() - ts
+            record["case_keys"][cl.study] = {c.name: c.key() for c in cl.cases}
+    record["stages"]["run"] = time.perf_counter() - t0
+    for cl in case_lists:
+        ts = time.perf_counter()
+        try:
+            tables = summarize(cl, store)
+        except LookupError as exc:  # a case it needs failed or is missing: say which, go on
+            print(f"{cl.study}: summary skipped: {exc}", file=stream)
+            record["studies"][cl.study]["summary_error"] = str(exc)
+            continue
+        for path in write_tables(tables, reports_dir):
+            print(f"wrote {path}", file=stream)
+        record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
+    write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
+    return record
+
+
+def environment_workers() -> int:
+    """Default worker count: $STUDY_WORKERS, else the number of CPUs this process may use."""
+    env = os.environ.get("STUDY_WORKERS")
+    if env:
+        if not env.isdigit() or int(env) < 1:
+            raise ValueError(f"STUDY_WORKERS = {env!r} must be a positive integer")
+        return int(env)
+    return max(len(os.sched_getaffinity(0)), 1)
