@@ -3,8 +3,10 @@ PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+SLOW_PASSED := .cache/slow-tests.passed
+SOURCES := $(shell find study tests reference -type f -not -name '*.pyc') pyproject.toml
 
-.PHONY: test reproduce errata initial report clean-cache
+.PHONY: test reproduce run errata initial report bench clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -15,10 +17,21 @@ $(STAMP): pyproject.toml
 test: $(STAMP)
 	$(PY) -m pytest
 
+# Every study (cached cases are reused), the report, then the slow cross-validation tests.
+# WORKERS=N sets the local worker processes; SCHEDULER=tcp://host:8786 runs the cases on a Dask cluster.
 reproduce: $(STAMP)
-	$(PY) -m study reproduce
-	$(PY) -m pytest -q -m slow tests/cross_validation
+	$(PY) -m study reproduce $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+	@$(MAKE) --no-print-directory $(SLOW_PASSED)
 	@echo "report: $(CURDIR)/reports/index.md and $(CURDIR)/reports/report.html"
+
+# The slow tests (long cross-validation runs) rerun whenever the code, the tests, the reference
+# data or the environment changed since they last passed; otherwise their pass is reused.
+$(SLOW_PASSED): $(STAMP) $(SOURCES)
+	$(PY) -m pytest -q -m slow
+	@mkdir -p $(dir $@) && touch $@
+
+run: $(STAMP)
+	$(PY) -m study run $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 errata: $(STAMP)
 	$(PY) -m study errata

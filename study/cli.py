@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+import time
 from pathlib import Path
+
+from study.pipeline import CASES_DIR
 
 REPORTS = Path("reports")
 
@@ -54,43 +58,53 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sliding_mode(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace) -> int:
     from study.model.compile import cache_dir
-    from study.studies.sliding_mode import run_study
+    from study.pipeline import CaseListError, environment_workers, run_pipeline
 
-    for path in run_study(args.out / "tables", cache_dir() / "results"):
-        print(f"wrote {path}")
-    return 0
-
-
-def _slider_crank(args: argparse.Namespace) -> int:
-    from study.model.compile import cache_dir
-    from study.studies.slider_crank import run_study
-
-    summary = run_study(cache_dir() / "results" / "slider_crank")
-    path = args.out / "tables" / "slider_crank_summary.csv"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # CPU time is machine-dependent; it stays in each saved result's JSON, not in the compared table
-    summary.drop(columns=["cpu_seconds"]).to_csv(path, index=False, float_format="%.6g")
-    print(f"wrote {path}")
-    return 0
+    try:
+        record = run_pipeline(args.out, cache_dir(), studies=args.studies or None,
+                              workers=args.workers or environment_workers(), scheduler=args.scheduler,
+                              folder=args.cases)
+    except (CaseListError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    failed = {s: r["failed"] for s, r in record["studies"].items() if r["failed"]}
+    for study, cases in failed.items():
+        for name, error in cases.items():
+            print(f"FAILED {name}: {error}", file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _report(args: argparse.Namespace) -> int:
     from study.model.compile import cache_dir
     from study.report import build_report
 
-    print(f"report: {build_report(args.out, cache_dir()).resolve()}")
+    print(f"report: {build_report(args.out, cache_dir(), getattr(args, 'cases', CASES_DIR)).resolve()}")
     return 0
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    for step in (_initial, _errata, _sliding_mode, _slider_crank, _report):
-        code = step(args)
-        if code:
+    from study.model.compile import cache_dir
+    from study.pipeline import PIPELINE_RECORD, save_record
+
+    stages = {}
+    code = 0
+    for name, step in (("initial", _initial), ("errata", _errata), ("run", _run), ("report", _report)):
+        if name == "report":  # the manifest shows the wall time of every stage before the report
+            record_path = cache_dir() / PIPELINE_RECORD
+            record = json.loads(record_path.read_text())
+            record["stages"].update({k: stages[k] for k in ("initial", "errata")})
+            save_record(record, cache_dir())
+        t0 = time.perf_counter()
+        code = step(args) or code
+        stages[name] = time.perf_counter() - t0
+        if code and not (name == "run" and code == 1):  # failed cases (1) are reported; errors stop
             return code
-    print(f"reports written under {args.out.resolve()}")
-    return 0
+    print("wall time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items()), file=sys.stderr)
+    print(f"(details per study: {cache_dir() / PIPELINE_RECORD})", file=sys.stderr)
+    print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
+    return code
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -100,17 +114,27 @@ def build_parser() -> argparse.ArgumentParser:
         ("initial", _initial, "consistent initial conditions and the printed ones' residuals"),
         ("errata", _errata, "check the papers' printed formulas against the derived equations"),
         ("report", _report, "figures, tables, index.md and report.html from saved results only"),
-        ("reproduce", _reproduce, "run everything that exists and write reports/"),
     ):
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
         p.set_defaults(func=func)
-    p = sub.add_parser("slider-crank", help="000's slider-crank with Coulomb friction: variants x treatments")
-    p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
-    p.set_defaults(func=_slider_crank)
-    p = sub.add_parser("sliding-mode", help="001's drift claims over methods, sgn approximations and integrators")
-    p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
-    p.set_defaults(func=_sliding_mode)
+    for name, func, text in (
+        ("run", _run, "run the studies' cases (reference/cases/*.toml) that are not cached, write their tables"),
+        ("reproduce", _reproduce, "initial conditions, errata, every study, and the report"),
+    ):
+        p = sub.add_parser(name, help=text)
+        p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
+        p.add_argument("--workers", type=int, default=None,
+                       help="local worker processes (default: $STUDY_WORKERS or the CPUs available)")
+        p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run the cases on the Dask cluster at ADDRESS (e.g. tcp://host:8786)")
+        p.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR",
+                       help="folder of case lists (default: reference/cases)")
+        if name == "run":
+            p.add_argument("studies", nargs="*", help="studies to run (default: every case list)")
+        else:
+            p.set_defaults(studies=None)
+        p.set_defaults(func=func)
 
     from study.mechanisms import MECHANISMS
     from study.solver.accelerations import ACCELERATION_SOLVERS

@@ -67,12 +67,17 @@ CODE_PATHS = {
     "exudyn": _COMMON_CODE + ("exudyn_models",),
 }
 NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
+PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
 _GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude"}
 _FIELD_SWEEPS = ("mechanism", "variant", "t_end")
 
 
 class CaseListError(ValueError):
     """A case list is malformed; the message names the file, the group and the value."""
+
+
+class MissingResult(LookupError):
+    """A case has no saved result (not run yet, or it failed)."""
 
 
 # --- cases ---------------------------------------------------------------------------------------
@@ -296,7 +301,7 @@ class Store:
         if not self.has(case):
             failure = self.failure(case)
             why = f"it failed: {failure['error']}" if failure else "it has not been run"
-            raise LookupError(f"no saved result for case {case.name} ({why})")
+            raise MissingResult(f"no saved result for case {case.name} ({why})")
         return SimulationResult.load(self.base(case))
 
     def save(self, case: Case, result: SimulationResult) -> Path:
@@ -400,6 +405,21 @@ class RunSummary:
     wall_seconds: dict[str, float] = field(default_factory=dict)
 
 
+def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Future]]:
+    """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops."""
+    if isinstance(executor, InlineExecutor):  # one at a time, so each is saved before the next starts
+        for case in todo:
+            yield case, executor.submit(_run_case_timed, case)
+        return
+    futures = {executor.submit(_run_case_timed, case): case for case in todo}
+    try:
+        for future in as_completed(futures):
+            yield futures[future], future
+    finally:  # KeyboardInterrupt or an error while saving: do not leave work queued
+        for future in futures:
+            future.cancel()
+
+
 def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
               stream=None) -> RunSummary:
     """Run every case without a saved result on ``executor``; save each as it completes.
@@ -417,27 +437,19 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     if not todo:
         return summary
     progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
-    futures = {executor.submit(_run_case_timed, case): case for case in todo}
-    try:
-        for future in as_completed(futures):
-            case = futures[future]
-            try:
-                result, wall = future.result()
-            except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
-                error = f"{type(exc).__name__}: {exc}"
-                details = "".join(traceback.format_exception(exc))
-                store.record_failure(case, error, details)
-                summary.failed[case.name] = error
-                progress.update(failed=True)
-                continue
-            store.save(case, result)
-            summary.computed += 1
-            summary.wall_seconds[case.name] = wall
-            progress.update()
-    except KeyboardInterrupt:
-        for future in futures:
-            future.cancel()
-        raise
+    for case, future in _outcomes(executor, todo):
+        try:
+            result, wall = future.result()
+        except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
+            error = f"{type(exc).__name__}: {exc}"
+            store.record_failure(case, error, "".join(traceback.format_exception(exc)))
+            summary.failed[case.name] = error
+            progress.update(failed=True)
+            continue
+        store.save(case, result)
+        summary.computed += 1
+        summary.wall_seconds[case.name] = wall
+        progress.update()
     return summary
 
 
@@ -502,7 +514,7 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
         ts = time.perf_counter()
         try:
             tables = summarize(cl, store)
-        except LookupError as exc:  # a case it needs failed or is missing: say which, go on
+        except MissingResult as exc:  # a case it needs failed or is missing: say which, go on
             print(f"{cl.study}: summary skipped: {exc}", file=stream)
             record["studies"][cl.study]["summary_error"] = str(exc)
             continue
@@ -510,7 +522,16 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
             print(f"wrote {path}", file=stream)
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
+    save_record(record, cache_root)
     return record
+
+
+def save_record(record: Mapping[str, Any], cache_root: Path) -> Path:
+    """Write the pipeline record (stage wall times, counts, failures) to ``<cache_root>/pipeline_record.json``."""
+    path = Path(cache_root) / PIPELINE_RECORD
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, json.dumps(record, indent=1, sort_keys=True))
+    return path
 
 
 def environment_workers() -> int:

@@ -167,6 +167,10 @@ def _jsonable(value: Any) -> Any:
 def atomic_write(path: Path, text: str) -> None:
     """Write to a temporary file in the same folder, then rename: readers never see half a file."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:  # interrupted or failed: leave no temporary file behind
+        Path(tmp).unlink(missing_ok=True)
+        raise

@@ -1,76 +1,33 @@
 """The report is built from saved results only: figures, index.md, report.html and manifest.json
-from a tiny synthetic set of saved runs, with every quoted number equal to the saved table's."""
+from a tiny pipeline run, with every quoted number equal to the saved table's."""
 
 import hashlib
 import json
+import os
 
-import numpy as np
 import pandas as pd
 import pytest
 
-from study.report import build_report, saved_run_stem
+from study import pipeline as pl
+from study.report import build_report
 from study.report.render import markdown_to_html, md_table
-from study.results import SimulationResult
-from study.studies import sliding_mode as sm
-
-SETTING = "RK45 rtol=1e-8"
-METHODS = ("none", "baumgarte", "sliding_mode/tanh")
+from tiny_cases import TINY
 
 
-def _options(setting, method):
-    if (setting, method) == ("reference", "reference"):
-        return sm.reference_options()
-    return next(o for s, m, o in sm.cases() if (s, m) == (setting, method))
-
-
-def _result(method, options, scale):
-    """A small run whose max|Phi| is known: Phi grows for 'none', stays ~scale otherwise."""
-    t = np.linspace(0.0, 1.0, 21)
-    q = np.column_stack([3.0 + 6.0 * t, 2.0 + 0.1 * np.sin(6 * t), 2.7 + 0.1 * np.cos(6 * t)])
-    q = q + scale * np.outer(t, [1.0, -1.0, 0.5])
-    growth = np.exp(4 * t) if method == "none" else 1.0 + 0.5 * np.sin(20 * t) ** 2
-    phi = scale * np.column_stack([growth, 0.5 * growth])
-    meta = {"mechanism": "quick_return", "variant": "seed", "coordinate_names": ["q1", "q2", "q3"],
-            "stabilization": options["method"], "t_end": 1.0, "output_step": 0.05,
-            **{k: v for k, v in options.items() if k != "method"}}
-    if options["method"] == "sliding_mode":
-        meta.update({"Lambda": 10.0, "K": 10.0, "k": 1e-6, "width": 1e-8})
-    return SimulationResult(t, q, np.gradient(q, t, axis=0), np.zeros_like(q), np.zeros((21, 2)), phi, 0.1 * phi,
-                            energies={"kinetic": 1.0 + t}, stats={"steps": 20, "nfev": 120, "projections": 0},
-                            meta=meta)
-
-
-@pytest.fixture
-def saved(tmp_path):
-    """A cache with three runs and the reference, and a reports folder with minimal tables."""
-    folder = tmp_path / "cache" / "results" / "sliding_mode"
-    scales = {"none": 1e-6, "baumgarte": 2.5e-8, "sliding_mode/tanh": 2.4e-8}
-    rows = []
-    for method in METHODS:
-        options = _options(SETTING, method)
-        result = _result(method, options, scales[method])
-        result.save(folder / saved_run_stem(SETTING, method, options))
-        phi = np.abs(result.phi).max(axis=1)
-        rows.append({"integrator_setting": SETTING, "method": method, "max_abs_phi": phi.max(),
-                     "phi_growth_last_vs_first_quarter": phi[-5:].max() / phi[:5].max()})
-    ref_options = _options("reference", "reference")
-    _result("projection", ref_options, 0.0).save(folder / saved_run_stem("reference", "reference", ref_options))
-
-    tables = tmp_path / "reports" / "tables"
-    tables.mkdir(parents=True)
-    runs = pd.DataFrame(rows)
-    runs.to_csv(tables / "sliding_mode_runs.csv", index=False, float_format="%.4g")
-    by = runs.set_index("method")["max_abs_phi"]
-    pd.DataFrame([{"integrator_setting": SETTING, "none_max_abs_phi": by["none"],
-                   "baumgarte_max_abs_phi": by["baumgarte"],
-                   "sliding_mode_max_abs_phi_min": by["sliding_mode/tanh"],
-                   "sliding_mode_max_abs_phi_max": by["sliding_mode/tanh"],
-                   "sliding_mode_about_1e-8": True}]).to_csv(tables / "sliding_mode_claims.csv", index=False,
-                                                           float_format="%.4g")
-    pd.DataFrame({"mechanism": ["quick_return", "quick_return"], "coordinate": ["q1", "q2"],
-                  "max_abs_phi_printed": [0.000149101776, 0.000149101776]}).to_csv(
-        tables / "initial_conditions.csv", index=False)
-    return tmp_path / "reports", tmp_path / "cache"
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    """The tiny sliding-mode study run by the pipeline, and a minimal initial-conditions table."""
+    root = tmp_path_factory.mktemp("report")
+    cases = root / "cases"
+    cases.mkdir()
+    (cases / "sliding_mode.toml").write_text(TINY)
+    reports, cache = root / "reports", root / "cache"
+    pl.run_pipeline(reports, cache, workers=1, folder=cases, stream=open(os.devnull, "w"))
+    pd.DataFrame({"mechanism": ["quick_return"], "max_abs_phi_printed": [0.000149101776],
+                  "max_abs_phi_consistent": [1e-16], "max_abs_phidot_printed": [2e-5],
+                  "max_abs_phidot_consistent": [3e-16]}).to_csv(reports / "tables" / "initial_conditions.csv",
+                                                                 index=False)
+    return reports, cache, cases
 
 
 def _row(markdown, first_cells):
@@ -81,28 +38,25 @@ def _row(markdown, first_cells):
 
 
 def test_report_from_saved_runs(saved):
-    reports, cache = saved
-    index = build_report(reports, cache)
+    reports, cache, cases = saved
+    index = build_report(reports, cache, cases)
     assert index == reports / "index.md"
     text = index.read_text()
     for section in ("## Initial conditions", "## Errata", "## Constraint drift: the sliding-mode claims of paper 001",
                     "## All tables", "## Provenance"):
         assert section in text
-    assert "errata table is missing" in text
+    assert "errata table is missing" in text and "## Failed cases" not in text
+    assert "max|Φ| = 0.000149101776" in text  # quoted with the saved digits
 
     # numbers quoted in the text are the saved table's, digit for digit
-    runs_csv = pd.read_csv(reports / "tables" / "sliding_mode_runs.csv", dtype=str).set_index("method")
-    baumgarte = runs_csv.loc["baumgarte", "max_abs_phi"]
-    row = _row(text, [SETTING, "10"])  # key-finding table: setting, omega, Baumgarte max|Phi|, ...
-    assert row[2] == baumgarte
-    assert float(row[2]) == float(runs_csv.loc["baumgarte", "max_abs_phi"])
-    ratio = float(runs_csv.loc["sliding_mode/tanh", "max_abs_phi"]) / float(baumgarte)
-    assert row[6] == f"{ratio:.3g}" and row[7] == f"{ratio:.3g}"
+    runs_csv = pd.read_csv(reports / "tables" / "sliding_mode_runs.csv", dtype=str)
+    at = runs_csv[runs_csv["integrator_setting"] == "RK45 rtol=1e-6"].set_index("method")
+    row = _row(text, ["RK45 rtol=1e-6", "10"])  # key-finding table: setting, omega, Baumgarte max|Phi|, ...
+    assert row[2] == at.loc["baumgarte", "max_abs_phi"]
     assert "max|Φ| agrees for every run" in text  # the table matches the saved runs
 
     figures = reports / "figures"
-    slug = "RK45_rtol1e-8"
-    for stem in (f"quick_return_constraint_violation_{slug}", f"quick_return_velocity_constraint_violation_{slug}",
+    for stem in ("quick_return_constraint_violation_RK45_rtol1e-6", "quick_return_velocity_constraint_violation_RK4_h1e-3",
                  "quick_return_trajectories", "sliding_mode_max_abs_phi_heatmap"):
         png = figures / f"{stem}.png"
         assert png.exists() and (figures / f"{stem}.svg").exists()
@@ -112,35 +66,39 @@ def test_report_from_saved_runs(saved):
     html = (reports / "report.html").read_text()
     assert '<img src="data:image/png;base64,' in html
     assert html.count("<img ") == text.count("![")
-    assert f"<td style=\"text-align:right\">{baumgarte}</td>" in html
 
     manifest = json.loads((reports / "manifest.json").read_text())
-    assert {"package_versions", "git_commit", "platform", "inputs", "outputs"} <= set(manifest)
+    assert {"package_versions", "python", "git_commit", "platform", "inputs", "outputs", "cases",
+            "stage_wall_seconds"} <= set(manifest)
+    keys = manifest["cases"]["sliding_mode"]
+    assert len(keys) == 7 and all(v["saved"] for v in keys.values())
+    assert "run:sliding_mode" in manifest["stage_wall_seconds"]
     inputs = {e["path"]: e["sha256"] for e in manifest["inputs"]}
-    runs_path = "reports/tables/sliding_mode_runs.csv"
+    runs_path = next(p for p in inputs if p.endswith("tables/sliding_mode_runs.csv"))
     assert inputs[runs_path] == hashlib.sha256((reports / "tables" / "sliding_mode_runs.csv").read_bytes()).hexdigest()
-    assert sum(p.endswith(".json") for p in inputs) == len(METHODS) + 1  # every saved run used
+    assert sum(p.endswith(".json") for p in inputs) == 7  # every saved run used
 
     # deterministic: building again gives the same files
     before = {p: (reports / p).read_bytes() for p in ("index.md", "report.html", "manifest.json")}
-    build_report(reports, cache)
+    build_report(reports, cache, cases)
     assert before == {p: (reports / p).read_bytes() for p in before}
 
 
-def test_report_derives_missing_tables_and_embeds_errata(saved):
-    reports, cache = saved
-    (reports / "tables" / "sliding_mode_runs.csv").unlink()
-    (reports / "tables" / "sliding_mode_claims.csv").unlink()
+def test_report_embeds_errata_and_lists_failed_cases(saved, tmp_path):
+    reports, cache, cases = saved
     (reports / "tables" / "errata.md").write_text("# Errata\n\n| formula | verdict |\n|---|---|\n"
                                                    "| `a\\|b` | wrong |\n")
-    text = build_report(reports, cache).read_text()
-    assert "derived at report time" in text
+    pd.DataFrame([{"study": "sliding_mode", "case": "sliding_mode/runs [x]", "key": "k",
+                   "error": "ValueError: boom"}]).to_csv(reports / "tables" / "failed_cases.csv", index=False)
+    text = build_report(reports, cache, cases).read_text()
     assert "### Errata" in text and "| `a\\|b` | wrong |" in text
     assert "<code>a|b</code>" in (reports / "report.html").read_text()
+    assert "## Failed cases" in text and "ValueError: boom" in text
 
 
-def test_report_without_saved_runs(tmp_path):
-    text = build_report(tmp_path / "reports", tmp_path / "empty_cache").read_text()
+def test_report_without_saved_runs(tmp_path, saved):
+    cases = saved[2]
+    text = build_report(tmp_path / "reports", tmp_path / "empty_cache", cases).read_text()
     assert "No saved runs found" in text and "initial_conditions.csv` is missing" in text
     assert (tmp_path / "reports" / "manifest.json").exists()
 

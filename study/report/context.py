@@ -54,14 +54,18 @@ class ReportContext:
         self.inputs += [base.with_suffix(".csv"), base.with_suffix(".json")]
         return result
 
-    def table(self, name: str) -> pd.DataFrame | None:
-        """``tables/<name>.csv`` (or ``timing/<name>.csv`` for names ending in ``_timing``), or None."""
+    def table(self, name: str, as_text: bool = False) -> pd.DataFrame | None:
+        """``tables/<name>.csv`` (``timing/<name>.csv`` for names ending in ``_timing``), or None if absent.
+
+        ``as_text=True`` keeps every cell as the saved string, so a number quoted from it has exactly
+        the saved digits.
+        """
         folder = "timing" if name.endswith("_timing") else "tables"
         path = self.reports_dir / folder / f"{name}.csv"
         if not path.exists():
             return None
         self.inputs.append(path)
-        return pd.read_csv(path)
+        return pd.read_csv(path, dtype=str, keep_default_na=False) if as_text else pd.read_csv(path)
 
     def figure(self, fig: Figure, stem: str, alt: str) -> str:
         """Save ``fig`` as ``figures/<stem>.png`` and ``.svg``; returns the Markdown image line."""

@@ -23,6 +23,8 @@ import re
 from pathlib import Path
 from typing import Callable, Sequence
 
+import pandas as pd
+
 _HEADING = re.compile(r"^(#{1,6})\s+(.*?)\s*#*\s*$")
 _IMAGE_LINE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)\s*$")
 _CELL_SPLIT = re.compile(r"(?<!\\)\|")
@@ -67,6 +69,22 @@ def md_table(header: Sequence[str], rows: Sequence[Sequence[object]],
             raise ValueError(f"table row {list(row)!r} has {len(row)} cells, expected {len(header)}")
         lines.append("| " + " | ".join(md_cell(c) for c in row) + " |")
     return "\n".join(lines)
+
+
+def _verdict(text: str) -> str:
+    return {"True": "holds", "False": "fails"}.get(text, text)
+
+
+def frame_table(text: pd.DataFrame, values: pd.DataFrame | None = None, verdicts: bool = False) -> str:
+    """Markdown table of a frame of saved strings; columns numeric in ``values`` are right-aligned.
+
+    ``verdicts=True`` shows True/False cells as 'holds'/'fails'.
+    """
+    values = text if values is None else values
+    right = [pd.api.types.is_numeric_dtype(values[c]) and not pd.api.types.is_bool_dtype(values[c])
+             for c in text.columns]
+    rows = [[_verdict(v) if verdicts else v for v in row] for row in text.itertuples(index=False)]
+    return md_table(list(text.columns), rows, right)
 
 
 def demote_headings(markdown: str, levels: int) -> str:

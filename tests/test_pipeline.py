@@ -1,0 +1,180 @@
+"""The pipeline: case lists, cache keys, caching, failed cases, resume after an interruption,
+determinism of the tables, and the Dask executor (on a LocalCluster)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from study import pipeline as pl
+
+from tiny_cases import tiny  # noqa: F401  (a pytest fixture)
+
+
+def _write(folder, text, name="demo.toml"):
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / name).write_text(text)
+    return folder / name
+
+
+# --- case lists --------------------------------------------------------------------------------
+def test_sweep_expands_to_labelled_cases(tiny):
+    cl = pl.load_case_list(tiny / "sliding_mode.toml")
+    assert len(cl.cases) == 7
+    case = pl.find_one(cl.cases, setting="RK4 h=1e-3", method="baumgarte")
+    assert case.kwargs == {"integrator": "RK4", "step": 1e-3, "method": "baumgarte", "d": 1.0, "omega": 10.0,
+                           "output_step": 0.05}
+    assert case.name == "sliding_mode/runs [setting=RK4 h=1e-3, method=baumgarte]"
+
+
+def test_exclude_and_field_sweeps(tmp_path):
+    path = _write(tmp_path, """
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "slider_crank"
+t_end = 1.0
+sweep = { variant = ["seed", "sustained_sliding"], method = ["none", "projection"] }
+exclude = [{ method = "projection" }]
+""")
+    cases = pl.load_case_list(path).cases
+    assert [(c.variant, c.kwargs) for c in cases] == [("seed", {"method": "none"}),
+                                                      ("sustained_sliding", {"method": "none"})]
+
+
+@pytest.mark.parametrize("group,message", [
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "matlab"', "engine = 'matlab'"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = -1.0', "t_end = -1.0 must be a number > 0"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweeps = {}', "unknown keys ['sweeps']"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweep = { omega = 3 }', "sweep.omega = 3 must be a non-empty list"),
+    ('name = "g"\nt_end = 1.0', "'mechanism' and 't_end' are required"),
+])
+def test_case_list_errors_name_the_file_group_and_value(tmp_path, group, message):
+    path = _write(tmp_path, f'[study]\nsummary = "x"\n[[group]]\n{group}\n')
+    with pytest.raises(pl.CaseListError) as err:
+        pl.load_case_list(path)
+    assert message in str(err.value) and "demo.toml" in str(err.value)
+
+
+def test_keys_follow_inputs_not_names():
+    base = pl.Case("s", "g", "inhouse", "quick_return", "seed", 1.0, (("method", "none"),))
+    renamed = pl.Case("other", "h", "inhouse", "quick_return", "seed", 1.0, (("method", "none"),), (("a", "b"),))
+    assert base.key() == renamed.key()
+    for changed in (pl.Case("s", "g", "inhouse", "quick_return", "seed", 2.0, (("method", "none"),)),
+                    pl.Case("s", "g", "inhouse", "quick_return", "smooth_cutting", 1.0, (("method", "none"),)),
+                    pl.Case("s", "g", "inhouse", "quick_return", "seed", 1.0, (("method", "projection"),)),
+                    pl.Case("s", "g", "exudyn", "quick_return", "seed", 1.0, (("method", "none"),))):
+        assert changed.key() != base.key()
+
+
+def test_every_committed_case_list_expands():
+    lists = pl.load_case_lists()
+    assert {"sliding_mode"} <= {cl.study for cl in lists}
+    for cl in lists:
+        keys = [c.key() for c in cl.cases]
+        assert cl.cases, cl.study
+        assert len({c.name for c in cl.cases}) == len(cl.cases), f"{cl.study}: two cases share a name"
+        assert len(set(keys)) <= len(keys)
+
+
+# --- running, caching, failures ----------------------------------------------------------------
+def test_cached_cases_are_not_rerun(tiny, tmp_path):
+    store = pl.Store(tmp_path / "runs")
+    cases = pl.load_case_list(tiny / "sliding_mode.toml").cases
+    first = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert (first.computed, first.cached, first.failed) == (7, 0, {})
+    stamps = {p: p.stat().st_mtime_ns for p in (tmp_path / "runs").rglob("*.json")}
+    second = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert (second.computed, second.cached) == (0, 7)
+    assert stamps == {p: p.stat().st_mtime_ns for p in (tmp_path / "runs").rglob("*.json")}
+    assert store.load(cases[0]).meta["case"]["key"] == cases[0].key()
+
+
+def test_failed_case_is_recorded_and_others_go_on(tmp_path):
+    path = _write(tmp_path / "cases", """
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "quick_return"
+t_end = 0.05
+sweep = { method = ["none", "magic", "projection"] }
+""")
+    cases = pl.load_case_list(path).cases
+    store = pl.Store(tmp_path / "runs")
+    out = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert out.computed == 2 and list(out.failed) == ["demo/g [method=magic]"]
+    assert "unknown stabilization" in out.failed["demo/g [method=magic]"] or "magic" in out.failed["demo/g [method=magic]"]
+    bad = pl.find_one(cases, method="magic")
+    assert store.failure(bad)["error"] == out.failed[bad.name] and "Traceback" in store.failure(bad)["traceback"]
+    with pytest.raises(LookupError, match="it failed"):
+        store.load(bad)
+    table = pl.failures_table([pl.load_case_list(path)], store)
+    assert list(table["case"]) == [bad.name]
+    again = pl.run_cases(cases, store, pl.InlineExecutor())  # failures are retried, successes are not
+    assert (again.cached, again.computed, len(again.failed)) == (2, 0, 1)
+
+
+def test_progress_line_counts_done_remaining_failed(tiny, tmp_path, capsys):
+    import io
+
+    stream = io.StringIO()
+    cases = pl.load_case_list(tiny / "sliding_mode.toml").cases[:2]
+    pl.run_cases(cases, pl.Store(tmp_path / "runs"), pl.InlineExecutor(), title="tiny", stream=stream)
+    last = stream.getvalue().strip().splitlines()[-1]
+    assert "2/2 done, 0 remaining, 0 failed" in last and last.startswith("tiny (0 cached)")
+
+
+# --- determinism and executors -----------------------------------------------------------------
+def _tables(reports):
+    return {p.name: p.read_bytes() for p in sorted((reports / "tables").glob("*.csv"))}
+
+
+def test_tables_are_byte_identical_across_runs_and_executors(tiny, tmp_path):
+    """Two cold runs (inline, and a 2-process pool) give byte-identical tables; timing lives apart."""
+    a = pl.run_pipeline(tmp_path / "a", tmp_path / "cache_a", workers=1, folder=tiny, stream=open(os.devnull, "w"))
+    b = pl.run_pipeline(tmp_path / "b", tmp_path / "cache_b", workers=2, folder=tiny, stream=open(os.devnull, "w"))
+    assert a["studies"]["sliding_mode"]["computed"] == b["studies"]["sliding_mode"]["computed"] == 7
+    ta, tb = _tables(tmp_path / "a"), _tables(tmp_path / "b")
+    assert set(ta) == {"sliding_mode_runs.csv", "sliding_mode_claims.csv", "failed_cases.csv"}
+    assert ta == tb
+    assert (tmp_path / "a" / "timing" / "sliding_mode_timing.csv").exists()
+    assert "cpu" not in ta["sliding_mode_runs.csv"].decode().splitlines()[0]
+
+
+def test_dask_local_cluster_gives_the_same_tables(tiny, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        record = pl.run_pipeline(tmp_path / "dask", tmp_path / "cache_d", scheduler=client, folder=tiny,
+                                 stream=open(os.devnull, "w"))
+    assert record["studies"]["sliding_mode"]["computed"] == 7
+    pl.run_pipeline(tmp_path / "local", tmp_path / "cache_l", workers=1, folder=tiny, stream=open(os.devnull, "w"))
+    assert _tables(tmp_path / "dask") == _tables(tmp_path / "local")
+
+
+def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
+    """SIGINT after the first saved result; the rerun reuses everything saved and completes."""
+    env = {**os.environ, "STUDY_CACHE_DIR": str(tmp_path / "cache")}
+    cmd = [sys.executable, "-m", "study", "run", "--workers", "1", "--cases", str(tiny), "--out", str(tmp_path / "r")]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runs = tmp_path / "cache" / "runs" / "sliding_mode"
+    deadline = time.monotonic() + 120
+    while not list(runs.glob("*.json")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=60)
+    saved = sorted(runs.glob("*.json"))
+    assert 1 <= len(saved) < 7, f"interruption came too late to test resuming ({len(saved)} saved)"
+    assert not list(runs.glob("*.tmp")), "a temporary file was left behind"
+    for path in saved:  # every saved result is complete
+        pl.SimulationResult.load(path)
+    done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert f"({len(saved)} cached)" in done.stderr and f"{7 - len(saved)}/{7 - len(saved)} done" in done.stderr
+    assert len(list(runs.glob("*.json"))) == 7
