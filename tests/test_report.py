@@ -111,3 +111,20 @@ def test_markdown_to_html_subset():
     assert "<li>one</li>" in html
     with pytest.raises(ValueError, match="expected 2"):
         md_table(["a", "b"], [["1"]])
+
+
+def test_claims_verdicts_follow_the_tables(tmp_path, saved):
+    """Each claim's verdict is computed from its table: change the table, the verdict changes."""
+    reports = tmp_path / "reports"
+    (reports / "tables").mkdir(parents=True)
+    pd.DataFrame({"mechanism": ["slider_crank", "quick_return"], "max_abs_phi_printed": [5.204, 1.5e-4]}).to_csv(
+        reports / "tables" / "initial_conditions.csv", index=False)
+    pd.DataFrame({"paper": [0, 0, 1], "verdict": ["exact", "wrong", "exact"]}).to_csv(
+        reports / "tables" / "errata.csv", index=False)
+    text = build_report(reports, tmp_path / "no_cache", saved[2]).read_text()
+    claims = text[text.index("## Claims of the papers"):text.index("## Initial conditions")]
+    assert "| 000 | the printed equations of motion are correct | fails (1 wrong) |" in claims
+    assert "| 001 | the printed equations of motion are correct | holds |" in claims
+    assert "| 000 | the printed initial state satisfies the constraints | fails | max\\|Φ\\| at the printed q(0) = 5.204 m" in claims
+    assert "| 001 | the printed initial state satisfies the constraints | holds |" in claims
+    assert claims.count("not checked") == 5  # friction and the four sliding-mode claims have no table
