@@ -294,8 +294,12 @@ class Store:
         readable = re.sub(r"[^A-Za-z0-9.+-]+", "_", f"{case.group}__{'_'.join(v for _, v in case.labels)}")
         return self.root / case.study / f"{readable.strip('_')[:80]}__{case.key()}"
 
+    def file(self, case: Case, suffix: str) -> Path:
+        base = self.base(case)
+        return base.with_name(base.name + suffix)  # not with_suffix: a name may contain dots ('h=0.001')
+
     def has(self, case: Case) -> bool:
-        return self.base(case).with_suffix(".json").exists()  # the JSON is written last
+        return self.file(case, ".json").exists()  # the JSON is written last
 
     def load(self, case: Case) -> SimulationResult:
         if not self.has(case):
@@ -311,7 +315,7 @@ class Store:
         return path
 
     def _failure_path(self, case: Case) -> Path:
-        return self.base(case).with_suffix(".failed.json")
+        return self.file(case, ".failed.json")
 
     def record_failure(self, case: Case, error: str, details: str) -> None:
         path = self._failure_path(case)

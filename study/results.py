@@ -120,8 +120,7 @@ class SimulationResult:
 
     def save(self, path: str | Path) -> Path:
         """Write ``<path>.csv`` and ``<path>.json`` atomically; returns the CSV path."""
-        path = Path(path)
-        base = path.with_suffix("") if path.suffix in (".csv", ".json") else path
+        base = _base(path)
         base.parent.mkdir(parents=True, exist_ok=True)
         sidecar = {
             "shape": {"m": self.q.shape[1], "r": self.lam.shape[1]},
@@ -131,16 +130,15 @@ class SimulationResult:
             "meta": self.meta,
         }
         csv_text = self.to_dataframe().to_csv(index=False, float_format="%.17g")
-        atomic_write(base.with_suffix(".csv"), csv_text)
-        atomic_write(base.with_suffix(".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
-        return base.with_suffix(".csv")
+        atomic_write(_with(base, ".csv"), csv_text)
+        atomic_write(_with(base, ".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
+        return _with(base, ".csv")
 
     @classmethod
     def load(cls, path: str | Path) -> "SimulationResult":
-        path = Path(path)
-        base = path.with_suffix("") if path.suffix in (".csv", ".json") else path
-        side = json.loads(base.with_suffix(".json").read_text())
-        df = pd.read_csv(base.with_suffix(".csv"))
+        base = _base(path)
+        side = json.loads(_with(base, ".json").read_text())
+        df = pd.read_csv(_with(base, ".csv"))
         m, r = side["shape"]["m"], side["shape"]["r"]
         data = df.to_numpy()
         t = data[:, 0]
@@ -150,6 +148,16 @@ class SimulationResult:
         energies = {n: df[f"energy:{n}"].to_numpy() for n in side["energies"]}
         forces = {n: df[f"force:{n}"].to_numpy() for n in side["forces"]}
         return cls(t, q, qd, qdd, lam, phi, phidot, energies, forces, side["stats"], side["meta"])
+
+
+def _base(path: str | Path) -> Path:
+    """The path without a trailing .csv/.json; any other dots are part of the name ('h0.001')."""
+    path = Path(path)
+    return path.with_name(path.name[:-len(path.suffix)]) if path.suffix in (".csv", ".json") else path
+
+
+def _with(base: Path, suffix: str) -> Path:
+    return base.with_name(base.name + suffix)
 
 
 def _jsonable(value: Any) -> Any:

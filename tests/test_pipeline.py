@@ -178,3 +178,21 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     assert done.returncode == 0, done.stderr
     assert f"({len(saved)} cached)" in done.stderr and f"{7 - len(saved)}/{7 - len(saved)} done" in done.stderr
     assert len(list(runs.glob("*.json"))) == 7
+
+
+def test_labels_with_dots_keep_cases_apart(tmp_path):
+    """'0.05' and '0.025' in the readable file name must not truncate it at the dot (two files, not one)."""
+    path = _write(tmp_path / "cases", """
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "quick_return"
+t_end = 0.1
+sweep = { output_step = [0.05, 0.025] }
+""")
+    cases = pl.load_case_list(path).cases
+    store = pl.Store(tmp_path / "runs")
+    pl.run_cases(cases, store, pl.InlineExecutor())
+    assert [len(store.load(c).t) for c in cases] == [3, 5]
+    assert len(list((tmp_path / "runs").rglob("*.json"))) == 2

@@ -34,7 +34,7 @@ from study.results import package_versions
 __all__ = ["SECTIONS", "build_report"]
 
 # Sections in report order (modules of study.report.sections).
-SECTIONS = ("claims", "initial", "errata", "sliding_mode")
+SECTIONS = ("claims", "initial", "errata", "sliding_mode", "cross_validation")
 
 
 def _other_tables_section(tables_dir: Path, shown: set[str]) -> list[str]:

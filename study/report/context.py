@@ -50,8 +50,7 @@ class ReportContext:
     def load(self, case: Case) -> SimulationResult:
         """The saved result of a case (LookupError if it is missing or failed)."""
         result = self.store.load(case)
-        base = self.store.base(case)
-        self.inputs += [base.with_suffix(".csv"), base.with_suffix(".json")]
+        self.inputs += [self.store.file(case, ".csv"), self.store.file(case, ".json")]
         return result
 
     def table(self, name: str, as_text: bool = False) -> pd.DataFrame | None:

@@ -1,0 +1,90 @@
+"""Frictionless runs: Exudyn's joint forces over the whole trajectory against the in-house reactions.
+
+* Prismatic joints: Exudyn's ForceLocal, mapped by the Exudyn model to the in-house multiplier
+  convention (``lam``), against the in-house multipliers.
+* Revolute joints: Exudyn's global joint forces (on the distal body) against the in-house
+  reactions recovered from the reference's q, qd, qdd and lambda by each body's Newton equation
+  (:func:`study.studies.cross_validation.inhouse_joint_forces`).
+
+Compared on common samples every 0.01 s at h, h/2, h/4; tolerances in reference/cross_validation.toml.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from study.compare import observed_orders
+from study.exudyn_models import run as exudyn_run
+from study.params import load_parameters
+from study.reference_data import tolerance
+from study.simulate import simulate
+from study.studies.cross_validation import inhouse_joint_forces, reaction_deviations
+
+OUTPUT_STEP = 0.01
+
+
+def tol(key: str) -> float:
+    return tolerance(key, table="cross_validation")
+
+
+@lru_cache(maxsize=None)
+def reference(mechanism, variant, t_end):
+    return simulate(mechanism, variant=variant, t_end=t_end, method="projection", integrator="DOP853",
+                    rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"), output_step=OUTPUT_STEP)
+
+
+def deviations(mechanism, variant, t_end, solver, steps):
+    ref = reference(mechanism, variant, t_end)
+    joints = inhouse_joint_forces(ref)
+    ps = load_parameters(mechanism, variant)
+    return [reaction_deviations(exudyn_run(ps, t_end, h, solver=solver, output_step=OUTPUT_STEP, friction="none"),
+                                ref, joints) for h in steps]
+
+
+CASES = [
+    # mechanism, variant, horizon [s], largest step
+    ("quick_return", "smooth_cutting", tol("order_horizon"), tol("quick_return_friction_steps")),
+    ("slider_crank", "sustained_sliding", tol("friction_horizon_sustained_sliding"),
+     tol("slider_crank_friction_steps")),
+]
+
+
+@pytest.mark.parametrize("mechanism,variant,t_end,h", CASES)
+def test_index2_reactions_converge_at_order_two(mechanism, variant, t_end, h):
+    """Every prismatic multiplier and every revolute-joint force component: order 2 with index 2."""
+    steps = [h, h / 2, h / 4]
+    rows = deviations(mechanism, variant, t_end, "index2", steps)
+    expected = {"slider_crank": {"lam1"} | {f"joint_{j}_{c}" for j in "OAB" for c in "xy"},
+                "quick_return": {"lam1", "lam2"} | {f"joint_{j}_{c}" for j in "OPAED" for c in "xy"}}[mechanism]
+    assert set(rows[0]) == expected
+    band, floor = tol("order_band"), tol("order_error_floor")
+    for quantity in sorted(expected):
+        e = [row[quantity][0] for row in rows]
+        assert min(e) > floor, (quantity, e)
+        p = observed_orders(steps, e)
+        assert np.all(np.abs(p - 2.0) <= band), f"{quantity}: errors {e}, orders {p}"
+
+
+def test_index3_reactions_quick_return_faster_than_first_order():
+    """Index-3 reactions carry the multipliers' O(h) initial layer: over h -> h/4 they converge
+    faster than first order (the orders between successive h vary, see index3_force_min_order)."""
+    mechanism, variant, t_end, h = CASES[0]
+    steps = [h, h / 2, h / 4]
+    rows = deviations(mechanism, variant, t_end, "index3", steps)
+    for quantity in sorted(rows[0]):
+        e = [row[quantity][0] for row in rows]
+        overall = observed_orders([steps[0], steps[-1]], [e[0], e[-1]])[0]
+        assert overall > tol("index3_force_min_order"), f"{quantity}: errors {e}, overall order {overall}"
+
+
+def test_index3_reactions_slider_crank_round_off_floor():
+    """Slider-crank index 3: the reaction deviations sit on a round-off floor (no order); bounded."""
+    mechanism, variant, t_end, h = CASES[1]
+    rows = deviations(mechanism, variant, t_end, "index3", [h, h / 2, h / 4])
+    scale = max(s for row in rows for _, s in row.values())
+    bound = tol("index3_reaction_floor_relative") * scale
+    worst = max(d for row in rows for d, _ in row.values())
+    assert worst <= bound, f"largest deviation {worst:.3e} N > {bound:.3e} N: {rows}"
