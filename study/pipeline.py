@@ -285,18 +285,22 @@ def _run_case_timed(case: Case) -> tuple[SimulationResult, float]:
 
 # --- the cache -----------------------------------------------------------------------------------
 class Store:
-    """Saved results under ``root/<study>/<readable>__<key>.{csv,json}``; failures as ``.failed.json``."""
+    """Saved results under ``root/<key>.{csv,json}``; failures as ``<key>.failed.json``.
+
+    The file name is the case's key alone: cases with equal inputs (a reference shared by two studies,
+    a grid point in two sweeps) share one saved result, whatever their study, group or labels. The
+    readable case (study, group, labels) is kept in the JSON's ``meta.case``.
+    """
 
     def __init__(self, root: Path):
         self.root = Path(root)
 
     def base(self, case: Case) -> Path:
-        readable = re.sub(r"[^A-Za-z0-9.+-]+", "_", f"{case.group}__{'_'.join(v for _, v in case.labels)}")
-        return self.root / case.study / f"{readable.strip('_')[:80]}__{case.key()}"
+        return self.root / case.key()
 
     def file(self, case: Case, suffix: str) -> Path:
         base = self.base(case)
-        return base.with_name(base.name + suffix)  # not with_suffix: a name may contain dots ('h=0.001')
+        return base.with_name(base.name + suffix)
 
     def has(self, case: Case) -> bool:
         return self.file(case, ".json").exists()  # the JSON is written last

@@ -163,7 +163,7 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     env = {**os.environ, "STUDY_CACHE_DIR": str(tmp_path / "cache")}
     cmd = [sys.executable, "-m", "study", "run", "--workers", "1", "--cases", str(tiny), "--out", str(tmp_path / "r")]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    runs = tmp_path / "cache" / "runs" / "sliding_mode"
+    runs = tmp_path / "cache" / "runs"
     deadline = time.monotonic() + 120
     while not list(runs.glob("*.json")) and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.01)
@@ -196,3 +196,25 @@ sweep = { output_step = [0.05, 0.025] }
     pl.run_cases(cases, store, pl.InlineExecutor())
     assert [len(store.load(c).t) for c in cases] == [3, 5]
     assert len(list((tmp_path / "runs").rglob("*.json"))) == 2
+
+
+def test_equal_inputs_share_one_saved_result(tmp_path):
+    """The same run in two groups (other names and labels) is computed once and found by both."""
+    path = _write(tmp_path / "cases", """
+[study]
+summary = "x"
+[[group]]
+name = "a"
+mechanism = "quick_return"
+t_end = 0.05
+options = { method = "none" }
+[[group]]
+name = "b"
+mechanism = "quick_return"
+t_end = 0.05
+sweep = { method = ["none", "projection"] }
+""")
+    cases = pl.load_case_list(path).cases
+    store = pl.Store(tmp_path / "runs")
+    out = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert out.computed == 2 and all(store.has(c) for c in cases)

@@ -34,7 +34,8 @@ from study.results import package_versions
 __all__ = ["SECTIONS", "build_report"]
 
 # Sections in report order (modules of study.report.sections).
-SECTIONS = ("claims", "initial", "errata", "sliding_mode", "cross_validation")
+SECTIONS = ("claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
+            "work_precision")
 
 
 def _other_tables_section(tables_dir: Path, shown: set[str]) -> list[str]:

@@ -17,6 +17,7 @@ import matplotlib
 import numpy as np
 import pandas as pd
 from matplotlib.colors import LogNorm, to_rgb
+from matplotlib.ticker import NullFormatter
 from PIL import Image
 from matplotlib.figure import Figure
 
@@ -230,4 +231,141 @@ def heatmap_figure(table: pd.DataFrame, value: str, settings: Sequence[str], met
         ax.set_title(title)
         fig.colorbar(image, ax=ax, label=colorbar_label)
         fig.tight_layout()
+    return fig
+
+
+# --- figures of the slider-crank, sensitivity and work-precision studies -------------------------
+# A series to draw: (legend label, x, y, line style keyword arguments for Axes.plot).
+Series = tuple[str, np.ndarray, np.ndarray, dict]
+
+
+def stacked_time_series_figure(panels: Sequence[tuple[str, Sequence[Series]]], title: str,
+                               shaded: Sequence[tuple[float, float]] = (), shade_label: str = "",
+                               xlabel: str = "time t [s]", figsize: tuple[float, float] | None = None) -> Figure:
+    """Panels stacked over a shared time axis, each with its own y label (units included).
+
+    ``panels``: (y label, series) per panel. ``shaded``: (start, end) intervals drawn as a grey band
+    in every panel (e.g. stick phases), labelled ``shade_label`` once in the legend of the first panel.
+    """
+    if not panels:
+        raise ValueError("no panels to draw")
+    with _style():
+        fig = Figure(figsize=figsize or (8.6, 2.3 * len(panels) + 0.8))
+        axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+        for k, (ax, (ylabel, series)) in enumerate(zip(axes, panels)):
+            for i, (a, b) in enumerate(shaded):
+                ax.axvspan(a, b, color="0.85", lw=0, zorder=0,
+                           label=shade_label if (k == 0 and i == 0 and shade_label) else None)
+            for label, x, y, style in series:
+                ax.plot(x, y, label=label, **style)
+            ax.set_ylabel(ylabel)
+            ax.legend(loc="best", frameon=False)
+        axes[-1].set_xlabel(xlabel)
+        axes[0].set_title(title)
+        fig.tight_layout()
+    return fig
+
+
+def log_lines_figure(panels: Sequence[Mapping], title: str, figsize: tuple[float, float] | None = None,
+                     markers: bool = True) -> Figure:
+    """Side-by-side panels of lines on log (or linear) axes, e.g. error against cost.
+
+    Each panel is a mapping with ``xlabel``, ``ylabel``, ``series`` (sequence of :data:`Series`) and
+    optionally ``title``, ``xscale`` and ``yscale`` (default 'log'), ``legend_title``, and ``hlines``:
+    (y, label, style) reference levels. Non-positive values on a log axis are left out (gaps).
+    """
+    if not panels:
+        raise ValueError("no panels to draw")
+    with _style():
+        fig = Figure(figsize=figsize or (4.6 * len(panels) + 0.6, 4.4))
+        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        for ax, panel in zip(axes, panels):
+            xscale, yscale = panel.get("xscale", "log"), panel.get("yscale", "log")
+            for label, x, y, style in panel["series"]:
+                x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+                keep = np.isfinite(x) & np.isfinite(y)
+                if xscale == "log":
+                    keep &= x > 0
+                if yscale == "log":
+                    keep &= y > 0
+                style = {"marker": "o", "ms": 3.5, **style} if markers else dict(style)
+                ax.plot(x[keep], y[keep], label=label, **style)
+            for y, label, style in panel.get("hlines", ()):
+                ax.axhline(y, label=label, **{"color": "0.4", "ls": ":", "lw": 1.0, **style})
+            ax.set_xscale(xscale)
+            ax.set_yscale(yscale)
+            for axis, scale in ((ax.xaxis, xscale), (ax.yaxis, yscale)):
+                if scale == "log":  # decade labels only: minor labels overlap on short log ranges
+                    axis.set_minor_formatter(NullFormatter())
+            ax.set_xlabel(panel["xlabel"])
+            ax.set_ylabel(panel["ylabel"])
+            if panel.get("title"):
+                ax.set_title(panel["title"])
+            if panel.get("legend_loc") == "below":
+                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False,
+                          title=panel.get("legend_title"))
+            else:
+                ax.legend(loc=panel.get("legend_loc", "best"), frameon=False, title=panel.get("legend_title"))
+        fig.suptitle(title, fontsize=10)
+        fig.tight_layout()
+    return fig
+
+
+def grid_heatmaps_figure(panels: Sequence[Mapping], title: str, colorbar_label: str,
+                         shared_scale: bool = True, ncols: int | None = None) -> Figure:
+    """One annotated heatmap per panel on a log colour scale (shared across panels by default).
+
+    Each panel is a mapping with ``title``, ``rows`` and ``cols`` (tick labels), ``row_label``,
+    ``col_label``, ``values`` (2-D array, rows x cols; NaN or <= 0 cells are blank), ``text``
+    (2-D array of cell annotations, e.g. the table's digits or 'failed') and, with
+    ``shared_scale=False``, optionally its own ``colorbar_label``. Panels fill ``ncols`` columns
+    (default: one row).
+    """
+    if not panels:
+        raise ValueError("no panels to draw")
+    ncols = ncols or len(panels)
+    nrows = -(-len(panels) // ncols)
+    grids = [np.asarray(p["values"], dtype=float) for p in panels]
+    finite = np.concatenate([g[np.isfinite(g) & (g > 0)] for g in grids])
+
+    def norm_for(g):
+        vals = finite if shared_scale else g[np.isfinite(g) & (g > 0)]
+        if not vals.size:
+            return None
+        lo, hi = vals.min(), vals.max()
+        return LogNorm(vmin=lo, vmax=hi if hi > lo else lo * 10)
+
+    with _style():
+        width = max(1.0 * len(p["cols"]) + (2.4 if not shared_scale else 1.6) for p in panels) * ncols + 1.4
+        height = (max(0.5 * len(p["rows"]) for p in panels) + 1.4) * nrows + 0.8
+        fig = Figure(figsize=(max(width, 6.0), height), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        for ax in axes[len(panels):]:
+            ax.set_visible(False)
+        image = None
+        for ax, panel, grid in zip(axes, panels, grids):
+            ax.grid(False)
+            norm = norm_for(grid)
+            image = ax.imshow(np.where(grid > 0, grid, np.nan), cmap="viridis", norm=norm, aspect="auto",
+                              origin="lower")
+            cmap = image.get_cmap()
+            text = panel["text"]
+            for i in range(grid.shape[0]):
+                for j in range(grid.shape[1]):
+                    if np.isfinite(grid[i, j]) and grid[i, j] > 0 and norm is not None:
+                        r, g, b, _ = cmap(norm(grid[i, j]))
+                        color = "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.5 else "white"
+                    else:
+                        color = "0.4"
+                    ax.text(j, i, str(text[i][j]), ha="center", va="center", fontsize=7, color=color)
+            ax.set_xticks(range(len(panel["cols"])), [str(c) for c in panel["cols"]])
+            ax.set_yticks(range(len(panel["rows"])), [str(r) for r in panel["rows"]])
+            ax.set_xlabel(panel["col_label"])
+            ax.set_ylabel(panel["row_label"])
+            ax.set_title(panel["title"])
+            if not shared_scale:
+                fig.colorbar(image, ax=ax, label=panel.get("colorbar_label", colorbar_label))
+        if shared_scale and image is not None:
+            fig.colorbar(image, ax=list(axes[:len(panels)]), label=colorbar_label)
+        fig.suptitle(title, fontsize=10)
     return fig

@@ -9,12 +9,15 @@ Two things live here:
    the parameters, the state and the sign hypotheses, independent of the builder and the solver,
    and the tests check it against the multiplier-based contact of ``study.solver.friction``.
 
-2. :func:`run_study`, the friction study: the variants ``seed``, ``sustained_sliding`` and
-   ``slip_then_stick`` with each friction treatment, plus the paper's printed (inconsistent)
-   initial conditions.
+2. The friction study, as data: the case list ``reference/cases/slider_crank.toml`` (the variants
+   ``seed``, ``sustained_sliding``, ``slip_then_stick`` and ``alpha_damping`` with each friction
+   treatment, 000's printed (inconsistent) initial conditions, and a sweep of the regularization
+   width eps), run by :mod:`study.pipeline`, and :func:`summarize`, which turns the saved runs
+   into the tables ``slider_crank_summary``, ``seed_holding_forces``, ``slider_crank_holding_forces``,
+   ``slider_crank_eps_sweep`` and their ``*_timing`` companions.
 
 What happens in the seed case (000's data, consistent initial conditions q1 = pi/6,
-q1' = 0.001 rad/s; numbers from ``seed_holding_forces.csv`` and ``summary.csv``): the mechanism does
+q1' = 0.001 rad/s; numbers from the tables ``seed_holding_forces`` and ``slider_crank_summary``): the mechanism does
 not run. The slider starts sliding at x_B' = -4.6e-4 m/s (crank turning forward); the resistance
 and the friction, F + f|N| = 5.5 + 0.25 * 15.51 = 9.38 N, stop it after 3.6 ms, when it has moved
 0.8 micrometre and the crank 1.9e-6 rad. From then on it sticks for the whole 20 s.
@@ -24,29 +27,40 @@ the drive M = +0.5 N m, the spring -alpha q1 = -0.0052 N m and the rod's weight 
 slider's weight acts along the guide's normal and has no component along the motion). Their sum,
 +0.0618 N m, pushes the slider towards -x through the lever dx_B/dq1 = -0.457 m. To hold it the
 guide supplies f_req = +0.135 N, 1.4 % of its static limit of 9.38 N. The spring is negligible:
-the drive and the rod's weight nearly cancel. Breaking away at this pose needs M = 4.77 N m (from
-the stick margin). ``slip_then_stick`` uses M = 5 N m: the slider slides, slows as the crank's
+the drive and the rod's weight nearly cancel. Breaking away at this pose needs M = 4.77 N m
+(:func:`breakaway_torque`). ``slip_then_stick`` uses M = 5 N m: the slider slides, slows as the crank's
 lever on it grows, and sticks at t = 4.43 s. ``sustained_sliding`` uses M = 10 N m: it never sticks,
 and it reverses only at the crank's dead centres, where it cannot be held.
 
 The paper's figures show motion over 20 s, which a correct model cannot produce from these data.
 The printed initial state is also 5.2 m off the guide (see the ``printed_*`` runs).
+
+The printed state cannot be used as is: post-step projection jumps to the nearest assembled
+configuration (minimum norm: a different crank angle); Baumgarte pulls the slider onto the guide
+over ~1 s with a normal force ~100 times the physical one, hence a friction force ~40 times too large
+and a spurious dissipation; the two end in different rest positions, neither the consistent run's.
+
+Where the exact treatment sticks, the other two do not. ``regularized`` creeps at
+v ~ eps atanh(|f_req| / limit); in ``slip_then_stick``, where f_req is close to the limit, the crank
+keeps turning (the ``slider_crank_eps_sweep`` table gives the creep for each eps). ``sign`` (RK4)
+neither sticks nor creeps smoothly: its stages straddle v = 0, so the velocity chatters or settles
+on a spurious fixed point of the step map (v ~ h a). Its friction work is then not the energy the
+model loses: the energy-balance error is about the whole reported dissipation.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
-from pathlib import Path
+from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
-from study.mechanisms import load
-from study.params import SliderCrankParameters
+from study.compare import common_samples, max_deviation
+from study.params import SliderCrankParameters, load_parameters
+from study.pipeline import Case, find, find_one
 from study.results import SimulationResult
-from study.simulate import simulate
 
 Array = np.ndarray
 
@@ -175,38 +189,95 @@ def holding_forces(v: SliderCrankParameters, q) -> dict[str, float]:
             "lever_dxB_dq1": lever, "f_required": f_req}
 
 
-# --- the study -----------------------------------------------------------------------------------
-VARIANTS = ("seed", "sustained_sliding", "slip_then_stick")
-# Treatments and their integrator settings (study's own choices):
-# exact: DOP853, rtol 1e-10 / atol 1e-12, the tightest setting that keeps every run well under a second per
-#   simulated second; its events are located to 1e-14 s, so it is the reference for the other two.
-# regularized: tanh(v/eps) with eps = 1e-3 m/s (about 0.1 % of the sliding speeds of the moving variants),
-#   RK45 at the solver's default tolerances.
-# sign: the paper's plain sgn with fixed-step RK4, h = 1e-3 s (what a MATLAB-style script would use).
-TREATMENTS = {
-    "exact": dict(friction="exact", integrator="DOP853", rtol=1e-10, atol=1e-12),
-    "regularized": dict(friction="regularized", friction_eps=1e-3, friction_sgn="tanh", integrator="RK45"),
-    "sign": dict(friction="sign", friction_eps=1e-3, integrator="RK4", step=1e-3),
-}
+def breakaway_torque(v: SliderCrankParameters, q) -> dict[str, float]:
+    """Drive torque M at which the mechanism, stuck at q (qd = 0), breaks away from the guide.
+
+    The holding force is affine in M, f_req = -(M + T_other) / lever (:func:`holding_forces`), and at
+    rest the moment balance of rod + slider about A (000 eq. 31/34, corrected, with zero inertial
+    terms) gives the normal force as an affine function of the tangential force f on the slider:
+    N = m3 g + (m2 g c2 cos th + l2 sin th f) / (l2 cos th), th = q1 + q2. The slider stays stuck while
+    |f| <= F + mu |N|; breakaway is where equality holds, on the side f_req is already pushing.
+
+    Returns
+    -------
+    dict with ``breakaway_M`` [N m] (NaN if no consistent solution), ``breakaway_f`` [N] and
+    ``breakaway_normal`` [N] at that torque.
+    """
+    held = holding_forces(v, q)
+    th = float(q[0] + q[1])
+    a = v.m3 * v.g + v.m2 * v.g * v.c2 / v.l2  # N at f = 0
+    b = math.tan(th)  # dN/df
+    s = 1.0 if held["f_required"] >= 0 else -1.0
+    t_other = held["torque_sum"] - held["torque_drive_M"]
+    for sigma in (1.0, -1.0):
+        f = (v.F + v.mu * sigma * a) / (s - v.mu * sigma * b)
+        normal = a + b * f
+        if s * f > 0 and sigma * normal >= 0:
+            return {"breakaway_M": -f * held["lever_dxB_dq1"] - t_other, "breakaway_f": f, "breakaway_normal": normal}
+    return {"breakaway_M": float("nan"), "breakaway_f": float("nan"), "breakaway_normal": float("nan")}
+
+
+def slider_position(v: SliderCrankParameters, q: Array) -> Array:
+    """x_B = l1 cos q1 - l2 cos(q1 + q2) [m] for (N, 2) samples q."""
+    q = np.atleast_2d(q)
+    return v.l1 * np.cos(q[:, 0]) - v.l2 * np.cos(q[:, 0] + q[:, 1])
+
+
+def slider_velocity(v: SliderCrankParameters, q: Array, qd: Array) -> Array:
+    """x_B' = -l1 sin q1 q1' + l2 sin(q1 + q2) (q1' + q2') [m/s] for (N, 2) samples q, qd."""
+    q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+    th = q[:, 0] + q[:, 1]
+    return -v.l1 * np.sin(q[:, 0]) * qd[:, 0] + v.l2 * np.sin(th) * (qd[:, 0] + qd[:, 1])
+
+
+# --- the study's tables (cases: reference/cases/slider_crank.toml) ---------------------------------
 REPORT_TIMES = (1.0, 5.0, 10.0, 20.0)
+Load = Callable[[Case], SimulationResult]
 
 
-def _phase_times(result: SimulationResult) -> dict:
-    """Stick onsets, slip onsets (leaving stick) and direction reversals of the guide contact."""
+def phase_times(result: SimulationResult) -> dict:
+    """Stick onsets, slip onsets (leaving stick) and direction reversals of the guide contact.
+
+    Exact treatment: the located transitions. Regularized and sign: apparent stick |v_t| <= eps on
+    the output samples (no reversals are reported).
+    """
     if result.meta.get("friction") == "exact":
         tr = [x for x in result.stats.get("friction_transitions", []) if x.get("contact")]
         stick = [x["t"] for x in tr if x["to"] == "stick"]
         slip = [x["t"] for x in tr if x["from"] == "stick"]
         rev = [x["t"] for x in tr if x["from"] != "stick" and x["to"] != "stick"]
         first = result.stats["friction_transitions"][0]["initial"]["guide"]
-    else:  # apparent stick |v_t| <= eps on the output samples
+        final = tr[-1]["to"] if tr else first
+    else:
         flag = result.forces["stick_guide"]
         change = np.flatnonzero(np.diff(flag) != 0) + 1
         stick = [float(result.t[i]) for i in change if flag[i] > 0]
         slip = [float(result.t[i]) for i in change if flag[i] == 0]
         rev = []
         first = "stick" if flag[0] > 0 else "slip"
-    return {"initial_phase": first, "stick_times": stick, "slip_times": slip, "reversals": rev}
+        final = "stick" if flag[-1] > 0 else "slip"
+    return {"initial_phase": first, "final_phase": final, "stick_times": stick, "slip_times": slip,
+            "reversals": rev}
+
+
+def stick_intervals(result: SimulationResult) -> list[tuple[float, float]]:
+    """(start, end) of every stick phase [s]: located ones (exact) or apparent ones (others)."""
+    if result.meta.get("friction") == "exact":
+        tr = [x for x in result.stats.get("friction_transitions", []) if x.get("contact")]
+        phase = result.stats["friction_transitions"][0]["initial"]["guide"]
+        out, start = [], float(result.t[0]) if phase == "stick" else None
+        for x in tr:
+            if x["to"] == "stick":
+                start = x["t"]
+            elif x["from"] == "stick" and start is not None:
+                out.append((start, x["t"]))
+                start = None
+        if start is not None:
+            out.append((start, float(result.t[-1])))
+        return out
+    flag = np.asarray(result.forces["stick_guide"]) > 0
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flag.astype(int), [0]])))
+    return [(float(result.t[a]), float(result.t[min(b, len(result.t) - 1)])) for a, b in zip(edges[::2], edges[1::2])]
 
 
 def _fmt(times, limit=12):
@@ -214,25 +285,31 @@ def _fmt(times, limit=12):
     return shown + (f";...(+{len(times) - limit})" if len(times) > limit else "")
 
 
-def summarize(name: str, result: SimulationResult, **labels) -> dict:
-    """One summary row: phase times, q1 and friction at REPORT_TIMES, dissipation, energy balance."""
-    phases = _phase_times(result)
+def _at(result: SimulationResult, t: float, values: Array) -> float:
+    i = int(np.argmin(np.abs(result.t - t)))
+    return float(values[i]) if abs(result.t[i] - t) < 1e-9 else float("nan")
+
+
+def summary_row(name: str, result: SimulationResult, **labels) -> dict:
+    """One row of ``slider_crank_summary``: phases, q1 / friction / normal force at REPORT_TIMES,
+    dissipation, energy balance, constraint violation and (deterministic) work counts."""
+    phases = phase_times(result)
     row = {"case": name, **labels, "initial_phase": phases["initial_phase"],
            "n_stick": len(phases["stick_times"]), "stick_times": _fmt(phases["stick_times"]),
            "n_slip_from_stick": len(phases["slip_times"]), "slip_times": _fmt(phases["slip_times"]),
            "n_reversals": len(phases["reversals"]), "reversal_times": _fmt(phases["reversals"])}
     for tr in REPORT_TIMES:
-        i = int(np.argmin(np.abs(result.t - tr)))
-        ok = abs(result.t[i] - tr) < 1e-9
-        row[f"q1_t{tr:g}"] = float(result.q[i, 0]) if ok else float("nan")
-        row[f"friction_t{tr:g}"] = float(result.forces["friction_guide"][i]) if ok else float("nan")
-        row[f"normal_t{tr:g}"] = float(result.forces["normal_guide"][i]) if ok else float("nan")
+        row[f"q1_t{tr:g}"] = _at(result, tr, result.q[:, 0])
+        row[f"friction_t{tr:g}"] = _at(result, tr, result.forces["friction_guide"])
+        row[f"normal_t{tr:g}"] = _at(result, tr, result.forces["normal_guide"])
     s = result.summary()
     row.update({
+        "final_phase": phases["final_phase"],
+        "max_abs_normal": float(np.abs(result.forces["normal_guide"]).max()),
+        "max_abs_friction": float(np.abs(result.forces["friction_guide"]).max()),
         "dissipated_energy": float(-result.energies["work_friction_guide"][-1]),
         "energy_balance_error": s["energy_error"],
         "max_abs_phi": s["max_abs_phi"],
-        "cpu_seconds": s["cpu_seconds"],
         "nfev": result.stats.get("nfev"),
         "steps": result.stats.get("steps"),
         "events": result.stats.get("events"),
@@ -240,80 +317,122 @@ def summarize(name: str, result: SimulationResult, **labels) -> dict:
     return row
 
 
-def run_study(out_dir, t_end: float = 20.0, progress=print) -> pd.DataFrame:
-    """Run the slider-crank friction study and save every result plus ``summary.csv``.
+def _describe(case: Case) -> dict:
+    o = case.kwargs
+    return {"variant": case.variant, "treatment": o["friction"], "initial": o.get("initial", "consistent"),
+            "method": o.get("method", "none"), "integrator": o["integrator"]}
 
-    Runs: each of ``VARIANTS`` (consistent initial conditions) with each of ``TREATMENTS``; and the
-    seed variant from 000's printed, inconsistent initial state (q2 = 0.0834 puts the slider 5.2 m
-    below its guide and q' violates the velocity constraint) with the exact treatment, once with
-    post-step projection and once with Baumgarte stabilization. Those two show that the printed
-    state cannot be used as is: projection jumps to the nearest assembled configuration (minimum
-    norm: a different crank angle), Baumgarte pulls the slider onto the guide over ~1 s with a
-    normal force ~100 times the physical one, hence a friction force ~40 times too large and a
-    spurious dissipation; the two end in different rest positions, neither the one of the consistent run.
 
-    Where the exact treatment sticks, the other two do not. ``regularized`` creeps at
-    v ~ eps atanh(|f_req| / limit); in ``slip_then_stick``, where f_req is close to the limit, the crank
-    gains 0.05 rad over 15 s. ``sign`` (RK4) neither sticks nor creeps smoothly: its stages straddle
-    v = 0, so the velocity chatters or settles on a spurious fixed point of the step map (v ~ h a).
-    Its friction work is then not the energy the model loses: the energy-balance error equals the
-    whole reported dissipation (seed: 0.012 J against 8e-6 J for the exact run).
+def _case_name(case: Case) -> str:
+    if case.group == "printed":
+        return f"printed_{case.kwargs['method']}_{case.kwargs['friction']}"
+    return f"{case.variant}_{case.kwargs['friction']}"
 
-    Parameters
-    ----------
-    out_dir : path
-        Results go to ``<out_dir>/<case>.csv/.json``; also ``summary.csv`` and ``seed_holding_forces.csv``.
-    t_end : float
-        Horizon [s]; 000's is 20 s.
 
-    Returns
-    -------
-    pandas.DataFrame, the summary table.
+def holding_row(case: Case, result: SimulationResult) -> dict:
+    """What holds a run that ends stuck: the static balance at its final state, and the breakaway torque."""
+    ps = load_parameters(case.mechanism, case.variant)
+    v = ps.values
+    i = len(result.t) - 1
+    q = result.q[i]
+    row = {"case": _case_name(case), "variant": case.variant, "t": float(result.t[i]), "q1": float(q[0]),
+           "q2": float(q[1]), "M": v.M}
+    row.update(holding_forces(v, q))
+    normal = float(result.forces["normal_guide"][i])
+    row.update({"normal_N": normal, "friction_solver": float(result.forces["friction_guide"][i]),
+                "static_limit": float(v.F + v.mu * abs(normal))})
+    row["holding_fraction"] = abs(row["f_required"]) / row["static_limit"]
+    row.update(breakaway_torque(v, q))
+    x = slider_position(v, result.q[[0, i]])
+    row["slide_distance"] = float(abs(x[1] - x[0]))
+    row["crank_rotation"] = float(result.q[i, 0] - result.q[0, 0])
+    return row
+
+
+def eps_row(case: Case, result: SimulationResult, exact_case: Case, exact: SimulationResult) -> dict:
+    """One row of ``slider_crank_eps_sweep``: a regularized run against the exact run of its variant.
+
+    creep: where the exact run ends stuck (from its last stick onset t_s to t_end), the crank angle
+    the regularized run still turns, q1(t_end) - q1(t_s) [rad] (t_s rounded up to the next sample),
+    and that angle per second.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    rows = []
+    v = load_parameters(case.mechanism, case.variant).values
+    ia, ib = common_samples(result, exact)
+    dq1 = result.q[ia, 0] - exact.q[ib, 0]
+    xb = slider_position(v, result.q[ia]) - slider_position(v, exact.q[ib])
+    phases = phase_times(exact)
+    row = {"variant": case.variant, "friction_eps": case.kwargs["friction_eps"],
+           "friction_sgn": case.kwargs["friction_sgn"], "exact_final_phase": phases["final_phase"],
+           "max_abs_dq1_vs_exact": float(np.abs(dq1).max()),
+           "final_dq1_vs_exact": float(dq1[-1]),
+           "max_abs_dxB_vs_exact": float(np.abs(xb).max()),
+           "max_abs_dfriction_vs_exact": max_deviation(result, exact, "friction_guide"),
+           "max_abs_dnormal_vs_exact": max_deviation(result, exact, "normal_guide")}
+    if phases["final_phase"] == "stick" and phases["stick_times"]:
+        t_s = phases["stick_times"][-1]
+        i = int(np.searchsorted(result.t, t_s - 1e-12))
+        creep = float(result.q[-1, 0] - result.q[i, 0])
+        row.update({"exact_stick_from": t_s, "creep_q1": creep, "creep_rate_q1": creep / (result.t[-1] - result.t[i])})
+    else:
+        row.update({"exact_stick_from": float("nan"), "creep_q1": float("nan"), "creep_rate_q1": float("nan")})
+    d_reg = -result.energies["work_friction_guide"][-1]
+    d_ex = -exact.energies["work_friction_guide"][-1]
+    row.update({"dissipated_energy": float(d_reg), "dissipated_energy_exact": float(d_ex),
+                "energy_balance_error": result.summary()["energy_error"],
+                "nfev": result.stats.get("nfev"), "steps": result.stats.get("steps"),
+                "nfev_exact": exact.stats.get("nfev")})
+    return row
 
-    def run(name, eom_or_mech, q0=None, qd0=None, variant=None, **options):
-        wall = time.perf_counter()
-        result = simulate(eom_or_mech, q0, qd0, t_end=t_end, variant=variant, **options)
-        result.meta["case"] = name
-        result.save(out / name)
-        if progress:
-            progress(f"{name}: {time.perf_counter() - wall:.1f} s wall, {result.stats['nfev']} evaluations")
-        return result
 
-    seed_exact = None
-    for variant in VARIANTS:
-        for treatment, options in TREATMENTS.items():
-            name = f"{variant}_{treatment}"
-            result = run(name, "slider_crank", variant=variant, method="none", **options)
-            if variant == "seed" and treatment == "exact":
-                seed_exact = result
-            rows.append(summarize(name, result, variant=variant, treatment=treatment, initial="consistent",
-                                  method="none", integrator=options["integrator"]))
+def eps_sweep_cases(cases: Sequence[Case]) -> list[Case]:
+    """The regularized runs of the eps sweep: the group 'eps_sweep' plus the 'treatments' run of each
+    of its variants (eps = 1e-3), by variant in list order, then eps from wide to narrow."""
+    sweep = find(cases, group="eps_sweep")
+    variants = list(dict.fromkeys(c.variant for c in sweep))
+    out = []
+    for variant in variants:
+        runs = find(sweep, variant=variant) + find(cases, group="treatments", variant=variant, friction="regularized")
+        out += sorted(runs, key=lambda c: -c.kwargs["friction_eps"])
+    return out
 
-    ps, eom = load("slider_crank", "seed")
-    for method in ("projection", "baumgarte"):
-        name = f"printed_{method}_exact"
-        options = TREATMENTS["exact"]
-        result = run(name, eom, ps.initial.printed_q, ps.initial.printed_qd, method=method, **options)
-        rows.append(summarize(name, result, variant="seed", treatment="exact", initial="printed", method=method,
-                              integrator=options["integrator"]))
 
-    summary = pd.DataFrame(rows)
-    summary.to_csv(out / "summary.csv", index=False, float_format="%.10g")
+def summarize(cases: Sequence[Case], load: Load) -> dict[str, pd.DataFrame]:
+    """The study's tables from its saved runs (rows in case-list order).
 
-    # what holds the seed case: the static balance at its computed rest state
-    held = holding_forces(ps.values, seed_exact.q[-1])
-    i_end = len(seed_exact.t) - 1
-    held.update({"t": float(seed_exact.t[i_end]), "q1": float(seed_exact.q[i_end, 0]), "q2": float(seed_exact.q[i_end, 1]),
-                 "normal_N": float(seed_exact.forces["normal_guide"][i_end]),
-                 "friction_solver": float(seed_exact.forces["friction_guide"][i_end]),
-                 "static_limit": float(ps.values.F + ps.values.mu * abs(seed_exact.forces["normal_guide"][i_end])),
-                 "slide_distance": float(abs(ps.values.l1 * math.cos(seed_exact.q[i_end, 0])
-                                             - ps.values.l2 * math.cos(seed_exact.q[i_end].sum())
-                                             - ps.values.l1 * math.cos(seed_exact.q[0, 0])
-                                             + ps.values.l2 * math.cos(seed_exact.q[0].sum())))})
-    pd.DataFrame([held]).to_csv(out / "seed_holding_forces.csv", index=False, float_format="%.10g")
-    return summary
+    - ``slider_crank_summary``: one row per run of the groups 'treatments', 'alpha_damping' and
+      'printed' (:func:`summary_row`); ``slider_crank_timing``: their CPU seconds.
+    - ``slider_crank_holding_forces``: :func:`holding_row` for every exact run from the consistent
+      state that ends stuck; ``seed_holding_forces``: its seed row.
+    - ``slider_crank_eps_sweep``: :func:`eps_row` for each run of the group 'eps_sweep';
+      ``slider_crank_eps_sweep_timing``: their CPU seconds and those of the exact runs.
+    """
+    rows, timing, held = [], [], []
+    for case in cases:
+        if case.group not in ("treatments", "alpha_damping", "printed"):
+            continue
+        result = load(case)
+        name = _case_name(case)
+        rows.append(summary_row(name, result, **_describe(case)))
+        timing.append({"case": name, "cpu_seconds": result.stats.get("cpu_seconds"),
+                       "nfev": result.stats.get("nfev")})
+        if (case.kwargs["friction"] == "exact" and case.group != "printed"
+                and phase_times(result)["final_phase"] == "stick"):
+            held.append(holding_row(case, result))
+    tables = {"slider_crank_summary": pd.DataFrame(rows), "slider_crank_timing": pd.DataFrame(timing)}
+    if held:
+        held_table = pd.DataFrame(held)
+        tables["slider_crank_holding_forces"] = held_table
+        tables["seed_holding_forces"] = held_table[held_table["variant"] == "seed"].reset_index(drop=True)
+
+    eps_rows, eps_timing = [], []
+    for case in eps_sweep_cases(cases):
+        exact_case = find_one(cases, group="treatments", variant=case.variant, friction="exact")
+        result, exact = load(case), load(exact_case)
+        eps_rows.append(eps_row(case, result, exact_case, exact))
+        eps_timing.append({"variant": case.variant, "friction_eps": case.kwargs["friction_eps"],
+                           "cpu_seconds": result.stats.get("cpu_seconds"),
+                           "cpu_seconds_exact": exact.stats.get("cpu_seconds"), "nfev": result.stats.get("nfev")})
+    if eps_rows:
+        tables["slider_crank_eps_sweep"] = pd.DataFrame(eps_rows)
+        tables["slider_crank_eps_sweep_timing"] = pd.DataFrame(eps_timing)
+    return tables
