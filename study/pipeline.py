@@ -40,7 +40,6 @@ import importlib
 import itertools
 import json
 import os
-import re
 import sys
 import time
 import tomllib
@@ -49,7 +48,7 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_complet
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Mapping
+from typing import Any, Iterable, Iterator, Mapping
 
 import pandas as pd
 

@@ -23,6 +23,7 @@ import re
 from pathlib import Path
 from typing import Callable, Sequence
 
+import numpy as np
 import pandas as pd
 
 _HEADING = re.compile(r"^(#{1,6})\s+(.*?)\s*#*\s*$")
@@ -69,6 +70,23 @@ def md_table(header: Sequence[str], rows: Sequence[Sequence[object]],
             raise ValueError(f"table row {list(row)!r} has {len(row)} cells, expected {len(header)}")
         lines.append("| " + " | ".join(md_cell(c) for c in row) + " |")
     return "\n".join(lines)
+
+
+def fmt_number(x, digits: int = 3) -> str:
+    """A number with ``digits`` significant digits; '–' for NaN/inf; non-numbers as they are."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return str(x)
+    return "–" if not np.isfinite(x) else f"{x:.{digits}g}"
+
+
+def fmt_int(x) -> str:
+    """A count as an integer; non-numbers as they are."""
+    try:
+        return f"{int(round(float(x)))}"
+    except (TypeError, ValueError):
+        return str(x)
 
 
 def _verdict(text: str) -> str:

@@ -13,30 +13,14 @@ import pandas as pd
 
 from study.report import figures
 from study.report.context import ReportContext
-from study.report.render import md_table
+from study.report.render import fmt_int, fmt_number, md_table
+from study.studies import sliding_mode as sm_study  # 001's claimed levels and the 'about' rule
 
 STUDY = "sensitivity"
 SMOOTH_SGN = ("tanh", "sat", "arctan", "sqrt")
 SGN_STYLE = {"tanh": {"color": "tab:purple"}, "sat": {"color": "tab:orange", "ls": "--"},
              "arctan": {"color": "tab:brown", "ls": "-."}, "sqrt": {"color": "tab:pink", "ls": ":"}}
-# 001's claimed constraint levels (sec. 4, H.6, H.8, H.9), used only to say which cells reach them.
-CLAIMED = {"sliding_mode": 1e-8, "baumgarte": 1e-6}
 MECH = "quick-return (variant seed, on/off cutting law, {t_end:g} s)"  # horizon from the case list
-
-
-def _g(x, digits: int = 3) -> str:
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        return str(x)
-    return "–" if not np.isfinite(x) else f"{x:.{digits}g}"
-
-
-def _n(x) -> str:
-    try:
-        return f"{int(round(float(x)))}"
-    except (TypeError, ValueError):
-        return str(x)
 
 
 def _grid(frame: pd.DataFrame, rows: str, cols: str, value: str, counts: bool = False):
@@ -51,7 +35,7 @@ def _grid(frame: pd.DataFrame, rows: str, cols: str, value: str, counts: bool = 
             text[i][j] = "failed"
             continue
         grid[i, j] = float(row[value])
-        text[i][j] = _n(row[value]) if counts else _g(row[value], 2)
+        text[i][j] = fmt_int(row[value]) if counts else fmt_number(row[value], 2)
     return [f"{v:g}" for v in r_vals], [f"{v:g}" for v in c_vals], grid, text
 
 
@@ -115,44 +99,45 @@ def _reading(table: pd.DataFrame, horizon: pd.DataFrame | None, timing: pd.DataF
     items = []
     if len(failed):
         items.append(f"**{len(failed)} runs failed**: " + "; ".join(
-            f"{r['group']} ({r['sgn']} d={_g(r['d'])} ω={_g(r['omega'])} Λ={_g(r['Lambda'])} K={_g(r['K'])} "
-            f"k={_g(r['k'])} width={_g(r['width'])})" for _, r in failed.iterrows()) + ".")
+            f"{r['group']} ({r['sgn']} d={fmt_number(r['d'])} ω={fmt_number(r['omega'])} Λ={fmt_number(r['Lambda'])} K={fmt_number(r['K'])} "
+            f"k={fmt_number(r['k'])} width={fmt_number(r['width'])})" for _, r in failed.iterrows()) + ".")
     else:
         items.append(f"All {len(table)} runs finished; no setting in these grids makes the method fail outright.")
     if len(none):
         n = none.iloc[0]
-        items.append(f"Without stabilization max|Φ| = {_g(n['max_abs_phi'])} m over the {_g(t_end)} s (max|Δq| = "
-                     f"{_g(n['max_abs_dq_vs_reference'])} rad, {_n(n['nfev'])} evaluations).")
+        items.append(f"Without stabilization max|Φ| = {fmt_number(n['max_abs_phi'])} m over the {fmt_number(t_end)} s (max|Δq| = "
+                     f"{fmt_number(n['max_abs_dq_vs_reference'])} rad, {fmt_int(n['nfev'])} evaluations).")
     if len(bg):
         d1 = bg[bg["d"] == bg["d"].max()].sort_values("omega")
         lo, hi = d1.iloc[0], d1.iloc[-1]
         spread = bg.groupby("omega")["max_abs_phi"].agg(lambda s: s.max() / s.min())
-        reach = bg[bg["max_abs_phi"] <= CLAIMED["sliding_mode"]]
-        near = bg[(bg["max_abs_phi"] >= CLAIMED["baumgarte"] / 10) & (bg["max_abs_phi"] <= CLAIMED["baumgarte"] * 10)]
+        reach = bg[bg["max_abs_phi"] <= sm_study.CLAIMED_LEVEL["sliding_mode"]]
+        level = sm_study.CLAIMED_LEVEL["baumgarte"]
+        near = bg[(bg["max_abs_phi"] >= level / sm_study.DECADE) & (bg["max_abs_phi"] <= level * sm_study.DECADE)]
         items.append(
-            f"**Baumgarte: ω sets the level, d matters much less.** At d = {_g(lo['d'])} max|Φ| falls from "
-            f"{_g(lo['max_abs_phi'])} m (ω = {_g(lo['omega'])} 1/s) to {_g(hi['max_abs_phi'])} m (ω = {_g(hi['omega'])} 1/s), "
-            f"a factor {_g(lo['max_abs_phi'] / hi['max_abs_phi'])}; at a given ω the {bg['d'].nunique()} damping ratios "
-            f"differ by at most a factor {_g(spread.max(), 2)} (at ω = {_g(spread.idxmax())} 1/s). 001's Baumgarte level, ~1e-6 m (within a decade), holds only for "
-            f"ω ≤ {_g(near['omega'].max()) if len(near) else '–'} 1/s; {len(reach)} of {len(bg)} cells even reach "
-            f"001's sliding-mode level of 1e-8 m (all at ω ≥ {_g(reach['omega'].min()) if len(reach) else '–'} 1/s).")
+            f"**Baumgarte: ω sets the level, d matters much less.** At d = {fmt_number(lo['d'])} max|Φ| falls from "
+            f"{fmt_number(lo['max_abs_phi'])} m (ω = {fmt_number(lo['omega'])} 1/s) to {fmt_number(hi['max_abs_phi'])} m (ω = {fmt_number(hi['omega'])} 1/s), "
+            f"a factor {fmt_number(lo['max_abs_phi'] / hi['max_abs_phi'])}; at a given ω the {bg['d'].nunique()} damping ratios "
+            f"differ by at most a factor {fmt_number(spread.max(), 2)} (at ω = {fmt_number(spread.idxmax())} 1/s). 001's Baumgarte level, ~1e-6 m (within a decade), holds only for "
+            f"ω ≤ {fmt_number(near['omega'].max()) if len(near) else '–'} 1/s; {len(reach)} of {len(bg)} cells even reach "
+            f"001's sliding-mode level of 1e-8 m (all at ω ≥ {fmt_number(reach['omega'].min()) if len(reach) else '–'} 1/s).")
         items.append(
-            f"**Stiffness:** the cost rises with ω, from {_n(lo['nfev'])} evaluations (ω = {_g(lo['omega'])}) to "
-            f"{_n(hi['nfev'])} (ω = {_g(hi['omega'])}), ×{_g(hi['nfev'] / lo['nfev'], 2)}, as the explicit RK45 "
+            f"**Stiffness:** the cost rises with ω, from {fmt_int(lo['nfev'])} evaluations (ω = {fmt_number(lo['omega'])}) to "
+            f"{fmt_int(hi['nfev'])} (ω = {fmt_number(hi['omega'])}), ×{fmt_number(hi['nfev'] / lo['nfev'], 2)}, as the explicit RK45 "
             f"step becomes limited by stability (2dω and ω² enter the constraint dynamics) rather than accuracy.")
     if len(sm):
         by_gain = sm.groupby(["Lambda", "K"])["max_abs_phi"].agg(lambda s: s.max() / s.min())
         low = sm[(sm["Lambda"] == sm["Lambda"].min()) & (sm["K"] == sm["K"].min())]
         high = sm[(sm["Lambda"] == sm["Lambda"].max()) & (sm["K"] == sm["K"].max())]
-        reach = sm[sm["max_abs_phi"] <= CLAIMED["sliding_mode"]]
+        reach = sm[sm["max_abs_phi"] <= sm_study.CLAIMED_LEVEL["sliding_mode"]]
         reach_gain = reach[["Lambda", "K"]].max(axis=1).min() if len(reach) else np.nan
         items.append(
             f"**Sliding mode: Λ and K set the level, the sgn approximation does not.** At any (Λ, K) the four smooth "
-            f"approximations give max|Φ| within {_g(100 * (by_gain.max() - 1), 2)} % of each other; max|Φ| goes "
-            f"from {_g(low['max_abs_phi'].min())}–{_g(low['max_abs_phi'].max())} m (Λ = K = {_g(sm['Lambda'].min())} 1/s) to "
-            f"{_g(high['max_abs_phi'].min())}–{_g(high['max_abs_phi'].max())} m (Λ = K = {_g(sm['Lambda'].max())} 1/s), "
-            f"and the cost from {_n(low['nfev'].min())} to {_n(high['nfev'].max())} evaluations. max|Φ| ≤ 1e-8 m "
-            f"(001's sliding-mode level) takes max(Λ, K) ≥ {_g(reach_gain)} 1/s: {len(reach)} of {len(sm)} cells.")
+            f"approximations give max|Φ| within {fmt_number(100 * (by_gain.max() - 1), 2)} % of each other; max|Φ| goes "
+            f"from {fmt_number(low['max_abs_phi'].min())}–{fmt_number(low['max_abs_phi'].max())} m (Λ = K = {fmt_number(sm['Lambda'].min())} 1/s) to "
+            f"{fmt_number(high['max_abs_phi'].min())}–{fmt_number(high['max_abs_phi'].max())} m (Λ = K = {fmt_number(sm['Lambda'].max())} 1/s), "
+            f"and the cost from {fmt_int(low['nfev'].min())} to {fmt_int(high['nfev'].max())} evaluations. max|Φ| ≤ 1e-8 m "
+            f"(001's sliding-mode level) takes max(Λ, K) ≥ {fmt_number(reach_gain)} 1/s: {len(reach)} of {len(sm)} cells.")
     if len(sm) and len(bg):
         pairs = []
         for w in sorted(set(bg["omega"]) & set(sm["Lambda"])):
@@ -165,61 +150,61 @@ def _reading(table: pd.DataFrame, horizon: pd.DataFrame | None, timing: pd.DataF
             items.append(
                 "**At equal gains the two methods coincide.** With Λ = K = ω the sliding surface gives "
                 "Φ̈ = −(Λ + K)Φ̇ − ΛKΦ − k sgn(s), which is Baumgarte with d = 1 plus the switching term: max|Φ| of "
-                "the sliding-mode runs over Baumgarte's (d = 1) lies between " f"{_g(min(ratio))} and {_g(max(ratio))} "
-                f"at ω = {', '.join(_g(p[0]) for p in pairs)} 1/s.")
+                "the sliding-mode runs over Baumgarte's (d = 1) lies between " f"{fmt_number(min(ratio))} and {fmt_number(max(ratio))} "
+                f"at ω = {', '.join(fmt_number(p[0]) for p in pairs)} 1/s.")
     if len(k_sweep):
         lo, hi = k_sweep[k_sweep["k"] == k_sweep["k"].min()], k_sweep[k_sweep["k"] == k_sweep["k"].max()]
         items.append(
-            f"**The switching gain k adds cost, not accuracy.** From k = {_g(k_sweep['k'].min())} to "
-            f"{_g(k_sweep['k'].max())} (width {_g(k_sweep['width'].iloc[0])}) max|Φ| stays between "
-            f"{_g(k_sweep['max_abs_phi'].min())} and {_g(k_sweep['max_abs_phi'].max())} m, while the evaluations rise "
-            f"from {_n(lo['nfev'].max())} to {_n(hi['nfev'].min())}–{_n(hi['nfev'].max())}: inside the boundary layer "
-            f"the sgn term is a linear gain k/width (up to {_g(k_sweep['k'].max() / k_sweep['width'].iloc[0])} 1/s), "
-            f"which makes the ODE stiff; max|Φ̇| grows from {_g(lo['max_abs_phidot'].max())} to "
-            f"{_g(hi['max_abs_phidot'].max())} m/s.")
+            f"**The switching gain k adds cost, not accuracy.** From k = {fmt_number(k_sweep['k'].min())} to "
+            f"{fmt_number(k_sweep['k'].max())} (width {fmt_number(k_sweep['width'].iloc[0])}) max|Φ| stays between "
+            f"{fmt_number(k_sweep['max_abs_phi'].min())} and {fmt_number(k_sweep['max_abs_phi'].max())} m, while the evaluations rise "
+            f"from {fmt_int(lo['nfev'].max())} to {fmt_int(hi['nfev'].min())}–{fmt_int(hi['nfev'].max())}: inside the boundary layer "
+            f"the sgn term is a linear gain k/width (up to {fmt_number(k_sweep['k'].max() / k_sweep['width'].iloc[0])} 1/s), "
+            f"which makes the ODE stiff; max|Φ̇| grows from {fmt_number(lo['max_abs_phidot'].max())} to "
+            f"{fmt_number(hi['max_abs_phidot'].max())} m/s.")
     if len(w_sweep):
         items.append(
-            f"**The boundary width barely matters at k = {_g(w_sweep['k'].iloc[0])}:** over width "
-            f"{_g(w_sweep['width'].min())} … {_g(w_sweep['width'].max())} max|Φ| stays within "
-            f"{_g(w_sweep['max_abs_phi'].min())}–{_g(w_sweep['max_abs_phi'].max())} m and the evaluations within "
-            f"{_n(w_sweep['nfev'].min())}–{_n(w_sweep['nfev'].max())}.")
+            f"**The boundary width barely matters at k = {fmt_number(w_sweep['k'].iloc[0])}:** over width "
+            f"{fmt_number(w_sweep['width'].min())} … {fmt_number(w_sweep['width'].max())} max|Φ| stays within "
+            f"{fmt_number(w_sweep['max_abs_phi'].min())}–{fmt_number(w_sweep['max_abs_phi'].max())} m and the evaluations within "
+            f"{fmt_int(w_sweep['nfev'].min())}–{fmt_int(w_sweep['nfev'].max())}.")
     if len(sign):
         best = sign.loc[sign["max_abs_phi"].idxmin()]
         worst = sign.loc[sign["max_abs_phi"].idxmax()]
         chatter = sign.loc[sign["max_abs_phidot"].idxmax()]
         smooth_phidot = sm["max_abs_phidot"].max() if len(sm) else np.nan
         items.append(
-            f"**The exact sign with RK4 (h = 1e-3 s) chatters.** max|Φ| ranges from {_g(best['max_abs_phi'])} m "
-            f"(Λ = {_g(best['Lambda'])}, K = {_g(best['K'])}) to {_g(worst['max_abs_phi'])} m (Λ = {_g(worst['Lambda'])}, "
-            f"K = {_g(worst['K'])}); max|Φ̇| reaches {_g(chatter['max_abs_phidot'])} m/s (Λ = {_g(chatter['Lambda'])}, "
-            f"K = {_g(chatter['K'])}, max|Φ| = {_g(chatter['max_abs_phi'])} m) against at most "
-            f"{_g(smooth_phidot)} m/s for the smooth approximations, and max|Δq| is "
-            f"{_g(sign['max_abs_dq_vs_reference'].min())}–{_g(sign['max_abs_dq_vs_reference'].max())} rad (fixed step, "
-            f"{_n(sign['nfev'].iloc[0])} evaluations).")
+            f"**The exact sign with RK4 (h = 1e-3 s) chatters.** max|Φ| ranges from {fmt_number(best['max_abs_phi'])} m "
+            f"(Λ = {fmt_number(best['Lambda'])}, K = {fmt_number(best['K'])}) to {fmt_number(worst['max_abs_phi'])} m (Λ = {fmt_number(worst['Lambda'])}, "
+            f"K = {fmt_number(worst['K'])}); max|Φ̇| reaches {fmt_number(chatter['max_abs_phidot'])} m/s (Λ = {fmt_number(chatter['Lambda'])}, "
+            f"K = {fmt_number(chatter['K'])}, max|Φ| = {fmt_number(chatter['max_abs_phi'])} m) against at most "
+            f"{fmt_number(smooth_phidot)} m/s for the smooth approximations, and max|Δq| is "
+            f"{fmt_number(sign['max_abs_dq_vs_reference'].min())}–{fmt_number(sign['max_abs_dq_vs_reference'].max())} rad (fixed step, "
+            f"{fmt_int(sign['nfev'].iloc[0])} evaluations).")
     smooth = ok[ok["group"].isin(["baumgarte", "sliding_mode_gains", "sliding_mode_k", "sliding_mode_width"])]
     if len(smooth) and len(none):
         items.append(
             f"**Accuracy of q is mostly the integrator's:** over every smooth run max|Δq| against the reference lies "
-            f"between {_g(smooth['max_abs_dq_vs_reference'].min())} and {_g(smooth['max_abs_dq_vs_reference'].max())} "
-            f"rad (none: {_g(none.iloc[0]['max_abs_dq_vs_reference'])} rad) and varies irregularly over the grids, "
+            f"between {fmt_number(smooth['max_abs_dq_vs_reference'].min())} and {fmt_number(smooth['max_abs_dq_vs_reference'].max())} "
+            f"rad (none: {fmt_number(none.iloc[0]['max_abs_dq_vs_reference'])} rad) and varies irregularly over the grids, "
             f"unlike max|Φ|: at RK45 rtol 1e-8 the integration error of q dominates once |Φ| is small.")
     if timing is not None and len(timing):
-        items.append(f"CPU time of the whole grid on this machine: {_g(timing['cpu_seconds'].sum())} s "
+        items.append(f"CPU time of the whole grid on this machine: {fmt_number(timing['cpu_seconds'].sum())} s "
                      f"(`timing/sensitivity_timing.csv`).")
     lines += [f"- {t}" for t in items] + [""]
     if horizon is not None and len(horizon):
-        short, full = _g(horizon["short_horizon"].iloc[0]), _g(horizon["t_end"].max())
+        short, full = fmt_number(horizon["short_horizon"].iloc[0]), fmt_number(horizon["t_end"].max())
         lines += [f"Why {short} s is long enough (group `horizon_check`, {full} s runs): max|Φ| over the first "
                   f"{short} s and over the whole run.", "",
                   md_table(["setting", f"max|Φ| 0–{short} s [m]", "max|Φ| whole run [m]", "run [s]", "ratio"],
-                           [[r["setting"], _g(r["max_abs_phi_short"]), _g(r["max_abs_phi_full"]), _g(r["t_end"]),
-                             _g(r["ratio_full_to_short"])] for _, r in horizon.iterrows()],
+                           [[r["setting"], fmt_number(r["max_abs_phi_short"]), fmt_number(r["max_abs_phi_full"]), fmt_number(r["t_end"]),
+                             fmt_number(r["ratio_full_to_short"])] for _, r in horizon.iterrows()],
                            [False, True, True, True, True]), ""]
         stab = horizon[horizon["setting"] != "none"]
         if len(stab):
             lines += [f"With the weakest stabilizing gains the {full} s maximum is at most "
-                      f"{_g(stab['ratio_full_to_short'].max())} times the {short} s one; without stabilization it grows "
-                      f"{_g(horizon[horizon['setting'] == 'none']['ratio_full_to_short'].max())} times. The grids' "
+                      f"{fmt_number(stab['ratio_full_to_short'].max())} times the {short} s one; without stabilization it grows "
+                      f"{fmt_number(horizon[horizon['setting'] == 'none']['ratio_full_to_short'].max())} times. The grids' "
                       f"stabilized levels are therefore those of a long run; the drift of 'none' is not (see the "
                       f"sliding-mode study for long runs).", ""]
     return lines

@@ -17,7 +17,7 @@ from study.params import load_parameters
 from study.pipeline import Case
 from study.report import figures
 from study.report.context import ReportContext
-from study.report.render import md_table
+from study.report.render import fmt_number, md_table
 from study.studies import slider_crank as sc
 
 STUDY = "slider_crank"
@@ -28,14 +28,6 @@ TREATMENT_STYLE = {
     "sign": {"color": "tab:red", "lw": 0.6, "ls": ":", "alpha": 0.8},
 }
 EPS_COLORS = ("tab:purple", "tab:orange", "tab:green", "tab:brown", "tab:pink")
-
-
-def _g(x, digits: int = 3) -> str:
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        return str(x)
-    return "–" if not np.isfinite(x) else f"{x:.{digits}g}"
 
 
 def _row(table: pd.DataFrame | None, **where) -> pd.Series | None:
@@ -181,30 +173,30 @@ def _seed_text(summary: pd.DataFrame, held: pd.DataFrame | None) -> list[str]:
         "### What the seed case does",
         "",
         f"From the consistent initial state (000's q1 = π/6 and q1' = 0.001 rad/s, the constraint solved for q2, q2') "
-        f"the slider starts in phase `{seed['initial_phase']}` and **sticks at t = {_g(t_stick, 4)} s**, after "
-        f"moving {_g(hold['slide_distance'])} m while the crank turns {_g(hold['crank_rotation'])} rad. It stays "
-        f"stuck for the rest of the {_g(hold['t'])} s ({seed['n_slip_from_stick']} slip onsets after that). "
+        f"the slider starts in phase `{seed['initial_phase']}` and **sticks at t = {fmt_number(t_stick, 4)} s**, after "
+        f"moving {fmt_number(hold['slide_distance'])} m while the crank turns {fmt_number(hold['crank_rotation'])} rad. It stays "
+        f"stuck for the rest of the {fmt_number(hold['t'])} s ({seed['n_slip_from_stick']} slip onsets after that). "
         f"**The seed mechanism does not run**: 000's figures show motion over 20 s, which this model cannot "
         f"produce from 000's data.",
         "",
         f"What holds it (static balance at the rest state, 000's D = [1, d12]; torques about the crank axis): "
-        f"drive M = {_g(hold['torque_drive_M'], 4)} N m, the α-term {_g(hold['torque_alpha_term'], 3)} N m, "
-        f"the rod's weight {_g(hold['torque_rod_weight'], 4)} N m (the slider's weight is normal to the guide: "
-        f"{_g(hold['torque_slider_weight'])} N m). Their sum, {_g(hold['torque_sum'], 3)} N m, acts through the "
-        f"lever dx_B/dq1 = {_g(hold['lever_dxB_dq1'], 3)} m, so the guide must supply "
-        f"f_req = {_g(hold['f_required'], 3)} N against a static limit F + μ|N| = {_g(hold['static_limit'], 3)} N "
-        f"(N = {_g(hold['normal_N'], 4)} N): **{_g(100 * hold['holding_fraction'], 2)} % of the limit**. "
-        f"The solver's stuck friction force, {_g(hold['friction_solver'], 4)} N, is the same balance. "
-        f"**Breaking away at this pose needs M = {_g(hold['breakaway_M'], 3)} N m**, "
-        f"{_g(hold['breakaway_M'] / hold['M'], 3)} times 000's M = {_g(hold['M'])} N m.",
+        f"drive M = {fmt_number(hold['torque_drive_M'], 4)} N m, the α-term {fmt_number(hold['torque_alpha_term'], 3)} N m, "
+        f"the rod's weight {fmt_number(hold['torque_rod_weight'], 4)} N m (the slider's weight is normal to the guide: "
+        f"{fmt_number(hold['torque_slider_weight'])} N m). Their sum, {fmt_number(hold['torque_sum'], 3)} N m, acts through the "
+        f"lever dx_B/dq1 = {fmt_number(hold['lever_dxB_dq1'], 3)} m, so the guide must supply "
+        f"f_req = {fmt_number(hold['f_required'], 3)} N against a static limit F + μ|N| = {fmt_number(hold['static_limit'], 3)} N "
+        f"(N = {fmt_number(hold['normal_N'], 4)} N): **{fmt_number(100 * hold['holding_fraction'], 2)} % of the limit**. "
+        f"The solver's stuck friction force, {fmt_number(hold['friction_solver'], 4)} N, is the same balance. "
+        f"**Breaking away at this pose needs M = {fmt_number(hold['breakaway_M'], 3)} N m**, "
+        f"{fmt_number(hold['breakaway_M'] / hold['M'], 3)} times 000's M = {fmt_number(hold['M'])} N m.",
         "",
     ]
     damp = _row(summary, case="alpha_damping_exact")
     hold_d = _row(held, variant="alpha_damping")
     if damp is not None and hold_d is not None:
         lines += [f"Reading 000's '−α q1' as a damper −α q1' instead of a spring (variant `alpha_damping`) changes "
-                  f"nothing that matters: it sticks at t = {_g(_first_time(damp['stick_times']), 4)} s and needs "
-                  f"M = {_g(hold_d['breakaway_M'], 3)} N m to break away.", ""]
+                  f"nothing that matters: it sticks at t = {fmt_number(_first_time(damp['stick_times']), 4)} s and needs "
+                  f"M = {fmt_number(hold_d['breakaway_M'], 3)} N m to break away.", ""]
     return lines
 
 
@@ -214,19 +206,19 @@ def _variants_text(summary: pd.DataFrame, held: pd.DataFrame | None) -> list[str
     hold = _row(held, variant="slip_then_stick")
     if sts is not None:
         text = (f"`slip_then_stick` (drive torque raised; study's own case): the slider slides, slows as the "
-                f"crank's lever on it grows, and **sticks at t = {_g(_first_time(sts['stick_times']), 4)} s** with "
-                f"q1 = {_g(sts['q1_t20'], 4)} rad, dissipating {_g(sts['dissipated_energy'], 3)} J.")
+                f"crank's lever on it grows, and **sticks at t = {fmt_number(_first_time(sts['stick_times']), 4)} s** with "
+                f"q1 = {fmt_number(sts['q1_t20'], 4)} rad, dissipating {fmt_number(sts['dissipated_energy'], 3)} J.")
         if hold is not None:
-            text += (f" There the drive M = {_g(hold['M'])} N m needs {_g(100 * hold['holding_fraction'], 3)} % of "
-                     f"the static limit; breaking away at that pose would need M = {_g(hold['breakaway_M'], 3)} N m.")
+            text += (f" There the drive M = {fmt_number(hold['M'])} N m needs {fmt_number(100 * hold['holding_fraction'], 3)} % of "
+                     f"the static limit; breaking away at that pose would need M = {fmt_number(hold['breakaway_M'], 3)} N m.")
         lines += [text, ""]
     ss = _row(summary, case="sustained_sliding_exact")
     if ss is not None:
         lines += [f"`sustained_sliding` (drive torque raised further; study's own case): it **never sticks** "
                   f"({ss['n_stick']} stick phases), reverses {ss['n_reversals']} times (first at "
-                  f"t = {_g(_first_time(ss['reversal_times']), 4)} s, at the crank's dead centres, where it cannot "
-                  f"be held), reaches q1 = {_g(ss['q1_t20'], 4)} rad at 20 s and dissipates "
-                  f"{_g(ss['dissipated_energy'], 4)} J in the guide.", ""]
+                  f"t = {fmt_number(_first_time(ss['reversal_times']), 4)} s, at the crank's dead centres, where it cannot "
+                  f"be held), reaches q1 = {fmt_number(ss['q1_t20'], 4)} rad at 20 s and dissipates "
+                  f"{fmt_number(ss['dissipated_energy'], 4)} J in the guide.", ""]
     return lines
 
 
@@ -237,7 +229,7 @@ def _treatments_text(summary: pd.DataFrame) -> list[str]:
              "|(T + V − work of the loads and friction) − its initial value|.", ""]
     cols = ["case", "treatment", "integrator", "final_phase", "n_stick", "q1_t20", "friction_t20", "normal_t20",
             "dissipated_energy", "energy_balance_error", "max_abs_phi", "nfev"]
-    rows = [[r[c] if c in ("case", "treatment", "integrator", "final_phase") else (_n(r[c]) if c in ("nfev", "n_stick") else _g(r[c], 6 if c == "q1_t20" else 4))
+    rows = [[r[c] if c in ("case", "treatment", "integrator", "final_phase") else (_n(r[c]) if c in ("nfev", "n_stick") else fmt_number(r[c], 6 if c == "q1_t20" else 4))
              for c in cols] for _, r in summary[summary["initial"] == "consistent"].iterrows()]
     lines += [md_table(["run", "treatment", "integrator", "phase at end", "stick onsets", "q1(20 s) [rad]",
                         "F_fr(20 s) [N]", "N(20 s) [N]", "dissipated [J]", "energy-balance error [J]",
@@ -245,22 +237,22 @@ def _treatments_text(summary: pd.DataFrame) -> list[str]:
     ex, reg, sign = (_row(summary, case=f"seed_{t}") for t in ("exact", "regularized", "sign"))
     if ex is not None and reg is not None:
         lines.append(f"Where the exact treatment sticks, the regularized law **creeps**: in the seed case its crank "
-                     f"turns from {_g(ex['q1_t20'], 6)} rad (exact, stuck) to {_g(reg['q1_t20'], 6)} rad at 20 s, "
+                     f"turns from {fmt_number(ex['q1_t20'], 6)} rad (exact, stuck) to {fmt_number(reg['q1_t20'], 6)} rad at 20 s, "
                      f"and it needs {_n(reg['nfev'])} function evaluations against {_n(ex['nfev'])} for the exact "
                      f"run.")
     if sign is not None:
         lines.append(f"The plain sgn neither sticks nor creeps smoothly: RK4's stages straddle v = 0, so the "
-                     f"friction force jumps between the limits (seed: {_g(sign['friction_t10'], 4)} N at 10 s, "
-                     f"{_g(sign['friction_t20'], 4)} N at 20 s, where the exact run holds with "
-                     f"{_g(ex['friction_t20'], 4) if ex is not None else '–'} N). Its friction work is not the energy "
-                     f"the model loses: the energy-balance error, {_g(sign['energy_balance_error'], 4)} J, is as "
-                     f"large as its whole reported dissipation, {_g(sign['dissipated_energy'], 4)} J (exact: "
-                     f"{_g(ex['dissipated_energy'], 3) if ex is not None else '–'} J).")
+                     f"friction force jumps between the limits (seed: {fmt_number(sign['friction_t10'], 4)} N at 10 s, "
+                     f"{fmt_number(sign['friction_t20'], 4)} N at 20 s, where the exact run holds with "
+                     f"{fmt_number(ex['friction_t20'], 4) if ex is not None else '–'} N). Its friction work is not the energy "
+                     f"the model loses: the energy-balance error, {fmt_number(sign['energy_balance_error'], 4)} J, is as "
+                     f"large as its whole reported dissipation, {fmt_number(sign['dissipated_energy'], 4)} J (exact: "
+                     f"{fmt_number(ex['dissipated_energy'], 3) if ex is not None else '–'} J).")
     sts_ex, sts_sign = _row(summary, case="slip_then_stick_exact"), _row(summary, case="slip_then_stick_sign")
     if sts_ex is not None and sts_sign is not None:
         lines.append(f"In `slip_then_stick` the sign run's apparent stick starts at "
-                     f"{_g(_first_time(sts_sign['stick_times']), 3)} s (exact: "
-                     f"{_g(_first_time(sts_ex['stick_times']), 4)} s; the band |v| ≤ ε on 0.01 s samples).")
+                     f"{fmt_number(_first_time(sts_sign['stick_times']), 3)} s (exact: "
+                     f"{fmt_number(_first_time(sts_ex['stick_times']), 4)} s; the band |v| ≤ ε on 0.01 s samples).")
     return lines + [""]
 
 
@@ -275,9 +267,9 @@ def _eps_text(sweep: pd.DataFrame, timing: pd.DataFrame | None) -> list[str]:
         if timing is not None:
             t = timing[(timing["variant"] == r["variant"]) & np.isclose(timing["friction_eps"], r["friction_eps"], rtol=1e-6, atol=0)]
             cpu = t["cpu_seconds"].iloc[0] if len(t) else np.nan
-        rows.append([r["variant"], _g(r["friction_eps"]), _g(r["max_abs_dq1_vs_exact"]), _g(r["creep_q1"]),
-                     _g(r["max_abs_dfriction_vs_exact"]), _g(r["dissipated_energy"], 5),
-                     _g(r["dissipated_energy_exact"], 5), _n(r["nfev"]), _g(cpu, 2)])
+        rows.append([r["variant"], fmt_number(r["friction_eps"]), fmt_number(r["max_abs_dq1_vs_exact"]), fmt_number(r["creep_q1"]),
+                     fmt_number(r["max_abs_dfriction_vs_exact"]), fmt_number(r["dissipated_energy"], 5),
+                     fmt_number(r["dissipated_energy_exact"], 5), _n(r["nfev"]), fmt_number(cpu, 2)])
     lines += [md_table(["variant", "ε [m/s]", "max|Δq1| [rad]", "creep of q1 [rad]", "max|ΔF_fr| [N]",
                         "dissipated [J]", "dissipated, exact [J]", "evaluations", "CPU [s] (this machine)"],
                        rows, [False] + [True] * 8), ""]
@@ -286,17 +278,17 @@ def _eps_text(sweep: pd.DataFrame, timing: pd.DataFrame | None) -> list[str]:
         creep = sts["creep_q1"].to_numpy(dtype=float)
         eps = sts["friction_eps"].to_numpy(dtype=float)
         slopes = np.log(creep[:-1] / creep[1:]) / np.log(eps[:-1] / eps[1:])
-        lines.append(f"In `slip_then_stick` the creep falls with ε (log-log slope {_g(slopes.min(), 3)} to "
-                     f"{_g(slopes.max(), 3)} between neighbouring ε; 1 is proportional): "
-                     f"{_g(creep[0])} rad at ε = {_g(eps[0])} m/s, {_g(creep[-1])} rad at ε = {_g(eps[-1])} m/s, "
+        lines.append(f"In `slip_then_stick` the creep falls with ε (log-log slope {fmt_number(slopes.min(), 3)} to "
+                     f"{fmt_number(slopes.max(), 3)} between neighbouring ε; 1 is proportional): "
+                     f"{fmt_number(creep[0])} rad at ε = {fmt_number(eps[0])} m/s, {fmt_number(creep[-1])} rad at ε = {fmt_number(eps[-1])} m/s, "
                      f"while the cost rises from {_n(sts['nfev'].iloc[0])} to {_n(sts['nfev'].iloc[-1])} function "
                      f"evaluations (the law's stiffness grows like 1/ε). **No ε gives both stick and a cheap run: "
                      f"the exact treatment needs {_n(sts['nfev_exact'].iloc[0])} evaluations.**")
     ss = sweep[sweep["variant"] == "sustained_sliding"].sort_values("friction_eps", ascending=False)
     if len(ss):
         lines.append(f"In `sustained_sliding`, which never sticks, max|Δq1| goes from "
-                     f"{_g(ss['max_abs_dq1_vs_exact'].iloc[0])} rad at ε = {_g(ss['friction_eps'].iloc[0])} m/s "
-                     f"to {_g(ss['max_abs_dq1_vs_exact'].min())} rad, where the integrator's own error "
+                     f"{fmt_number(ss['max_abs_dq1_vs_exact'].iloc[0])} rad at ε = {fmt_number(ss['friction_eps'].iloc[0])} m/s "
+                     f"to {fmt_number(ss['max_abs_dq1_vs_exact'].min())} rad, where the integrator's own error "
                      f"(rtol 1e-8) takes over.")
     return lines + [""]
 
@@ -309,13 +301,13 @@ def _printed_text(summary: pd.DataFrame) -> list[str]:
     return ["### 000's printed initial state", "",
             f"The printed q2 puts the slider off its guide and q' violates the velocity constraint. Used as is: "
             f"post-step **projection** jumps to the nearest assembled configuration (minimum norm), a different crank "
-            f"angle, q1 = {_g(proj['q1_t1'], 4)} rad instead of {_g(seed['q1_t1'], 4)} rad, and sticks there at "
-            f"t = {_g(_first_time(proj['stick_times']), 3)} s. **Baumgarte** pulls the slider onto the guide with a "
-            f"normal force of up to {_g(baum['max_abs_normal'], 4)} N ({_g(baum['max_abs_normal'] / seed['max_abs_normal'], 3)} "
-            f"times the consistent run's {_g(seed['max_abs_normal'], 4)} N), hence friction up to "
-            f"{_g(baum['max_abs_friction'], 4)} N ({_g(baum['max_abs_friction'] / seed['max_abs_friction'], 3)} times), "
-            f"dissipates {_g(baum['dissipated_energy'], 4)} J (consistent: {_g(seed['dissipated_energy'], 3)} J) and "
-            f"comes to rest at q1 = {_g(baum['q1_t20'], 4)} rad. The two end at different rest positions, neither the "
+            f"angle, q1 = {fmt_number(proj['q1_t1'], 4)} rad instead of {fmt_number(seed['q1_t1'], 4)} rad, and sticks there at "
+            f"t = {fmt_number(_first_time(proj['stick_times']), 3)} s. **Baumgarte** pulls the slider onto the guide with a "
+            f"normal force of up to {fmt_number(baum['max_abs_normal'], 4)} N ({fmt_number(baum['max_abs_normal'] / seed['max_abs_normal'], 3)} "
+            f"times the consistent run's {fmt_number(seed['max_abs_normal'], 4)} N), hence friction up to "
+            f"{fmt_number(baum['max_abs_friction'], 4)} N ({fmt_number(baum['max_abs_friction'] / seed['max_abs_friction'], 3)} times), "
+            f"dissipates {fmt_number(baum['dissipated_energy'], 4)} J (consistent: {fmt_number(seed['dissipated_energy'], 3)} J) and "
+            f"comes to rest at q1 = {fmt_number(baum['q1_t20'], 4)} rad. The two end at different rest positions, neither the "
             f"consistent run's: the printed state cannot be used as is.", ""]
 
 

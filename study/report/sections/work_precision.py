@@ -15,7 +15,7 @@ import pandas as pd
 from study.reference_data import tolerance
 from study.report import figures
 from study.report.context import ReportContext
-from study.report.render import md_table
+from study.report.render import fmt_int, fmt_number, md_table
 from study.studies.work_precision import rk4_order_verdict
 
 STUDY = "work_precision"
@@ -27,21 +27,6 @@ INTEGRATOR_STYLE = {"RK45": {"marker": "o", "ls": "-"}, "DOP853": {"marker": "s"
 EXUDYN_STYLE = {"index3": {"color": "tab:red", "marker": "D", "ls": "-"},
                 "index2": {"color": "tab:cyan", "marker": "v", "ls": "--"}}
 TARGETS = (1e-4, 1e-6, 1e-8)  # error levels [rad] at which the cheapest setting of each series is read
-
-
-def _g(x, digits: int = 3) -> str:
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        return str(x)
-    return "–" if not np.isfinite(x) else f"{x:.{digits}g}"
-
-
-def _n(x) -> str:
-    try:
-        return f"{int(round(float(x)))}"
-    except (TypeError, ValueError):
-        return str(x)
 
 
 def _style(method: str, integrator: str) -> dict:
@@ -89,12 +74,12 @@ def _exudyn_series(ctx: ReportContext) -> tuple[list, str]:
     series = []
     for solver, runs in sel[sel["engine"] == "exudyn"].groupby("solver", sort=True):
         runs = runs.sort_values("cpu_seconds")
-        series.append((f"Exudyn {solver} (h = {_g(runs['h'].max())} … {_g(runs['h'].min())} s)", runs["cpu_seconds"],
+        series.append((f"Exudyn {solver} (h = {fmt_number(runs['h'].max())} … {fmt_number(runs['h'].min())} s)", runs["cpu_seconds"],
                        runs["max_abs_dq"], EXUDYN_STYLE.get(solver, {"color": "tab:gray", "marker": "x"})))
     for _, r in sel[sel["engine"] != "exudyn"].iterrows():
         series.append((f"in-house {r['solver']}", [r["cpu_seconds"]], [r["max_abs_dq"]],
                        {"color": "tab:green", "marker": "*", "ms": 9, "ls": "none"}))
-    return series, _g(sel["t_end"].iloc[0])
+    return series, fmt_number(sel["t_end"].iloc[0])
 
 
 def _work_precision_figure(ctx: ReportContext, table: pd.DataFrame) -> str:
@@ -153,9 +138,9 @@ def _cheapest(table: pd.DataFrame) -> tuple[list[str], list[list[str]]]:
         row = [method, integrator]
         for t in TARGETS:
             ok = runs[runs["max_abs_dq"] <= t]
-            row.append(_n(ok["nfev"].min()) if len(ok) else "not reached")
+            row.append(fmt_int(ok["nfev"].min()) if len(ok) else "not reached")
         at = runs[np.isclose(runs["rtol"].fillna(0), 1e-8, rtol=1e-6, atol=0)]
-        row.append(_g(at["max_abs_dq"].iloc[0]) if len(at) else "–")
+        row.append(fmt_number(at["max_abs_dq"].iloc[0]) if len(at) else "–")
         rows.append(row)
     return header, rows
 
@@ -173,14 +158,14 @@ def _reading(table: pd.DataFrame, orders: pd.DataFrame, band: float) -> list[str
     if len(tight):
         best = tight.loc[tight["max_abs_dq"].idxmin()]
         worst = tight.loc[tight["max_abs_dq"].idxmax()]
-        items.append(f"At rtol {_g(tight['rtol'].iloc[0])} the error lies between {_g(best['max_abs_dq'])} rad "
-                     f"({best['method']}, {best['integrator']}) and {_g(worst['max_abs_dq'])} rad ({worst['method']}, "
-                     f"{worst['integrator']}); max|Φ| is {_g(tight['max_abs_phi'].min())} … "
-                     f"{_g(tight['max_abs_phi'].max())} m.")
+        items.append(f"At rtol {fmt_number(tight['rtol'].iloc[0])} the error lies between {fmt_number(best['max_abs_dq'])} rad "
+                     f"({best['method']}, {best['integrator']}) and {fmt_number(worst['max_abs_dq'])} rad ({worst['method']}, "
+                     f"{worst['integrator']}); max|Φ| is {fmt_number(tight['max_abs_phi'].min())} … "
+                     f"{fmt_number(tight['max_abs_phi'].max())} m.")
     if non_monotone:
         items.append(f"**The error does not always fall with rtol:** in {len(non_monotone)} of "
                      f"{len(adaptive) - adaptive.groupby(['method', 'integrator']).ngroups} tenfold tightenings it "
-                     f"stays level or grows (e.g. " + "; ".join(f"{m}, {i} at rtol {_g(r)}" for m, i, r in non_monotone[:4])
+                     f"stays level or grows (e.g. " + "; ".join(f"{m}, {i} at rtol {fmt_number(r)}" for m, i, r in non_monotone[:4])
                      + "). The cutting law's tanh ramps (1 cm/s in v_D, 5 mm at the window edges) act almost as "
                      "switches, and a slightly shifted passage through one moves the whole later trajectory: "
                      "tolerance proportionality needs rtol well below the ramps' scale.")
@@ -188,28 +173,28 @@ def _reading(table: pd.DataFrame, orders: pd.DataFrame, band: float) -> list[str
     if "none" in by_method and len(by_method):
         extra = {m: float((by_method[m] / by_method["none"]).median()) for m in by_method.columns if m != "none"}
         items.append("Cost of stabilizing (RK45, median over rtol of evaluations relative to none): " +
-                     ", ".join(f"{m} ×{_g(v, 3)}" for m, v in extra.items()) +
+                     ", ".join(f"{m} ×{fmt_number(v, 3)}" for m, v in extra.items()) +
                      ". Projection does not raise the evaluation count much; its cost is the projections' Newton "
                      "iterations, visible in CPU time.")
     rk4 = table[table["group"] == "rk4"]
     if len(rk4):
         fine = rk4[rk4["step"] == rk4["step"].min()]
         mid = rk4[rk4["step"] == sorted(rk4["step"].unique())[1]] if rk4["step"].nunique() > 1 else fine
-        items.append(f"RK4 over 5 s: at h = {_g(mid['step'].iloc[0])} s every method has the same error, "
-                     f"{_g(mid['max_abs_dq'].min())} … {_g(mid['max_abs_dq'].max())} rad, and at h = "
-                     f"{_g(fine['step'].iloc[0])} s {_g(fine['max_abs_dq'].min())} … {_g(fine['max_abs_dq'].max())} rad: "
+        items.append(f"RK4 over 5 s: at h = {fmt_number(mid['step'].iloc[0])} s every method has the same error, "
+                     f"{fmt_number(mid['max_abs_dq'].min())} … {fmt_number(mid['max_abs_dq'].max())} rad, and at h = "
+                     f"{fmt_number(fine['step'].iloc[0])} s {fmt_number(fine['max_abs_dq'].min())} … {fmt_number(fine['max_abs_dq'].max())} rad: "
                      f"the unresolved ramps, not the stabilization, set it; the 'orders' between these steps "
-                     f"({_g(orders[orders['group'] == 'rk4']['observed_order'].min())} … "
-                     f"{_g(orders[orders['group'] == 'rk4']['observed_order'].max())}) are not asymptotic.")
+                     f"({fmt_number(orders[orders['group'] == 'rk4']['observed_order'].min())} … "
+                     f"{fmt_number(orders[orders['group'] == 'rk4']['observed_order'].max())}) are not asymptotic.")
     for group, text in (("rk4_order_smooth", "over the smooth first 0.08 s"),
                         ("rk4_order_revolution", "over one crank revolution (1 s, every ramp)")):
         o = orders[orders["group"] == group].sort_values("h_fine", ascending=False)
         if o.empty:
             continue
         v = rk4_order_verdict(orders, group, band)
-        items.append(f"**RK4 order {text}: {', '.join(_g(p) for p in o['observed_order'])}** for h from "
-                     f"{_g(o['h_coarse'].max())} to {_g(o['h_fine'].min())} s; the finest pair gives "
-                     f"{_g(v['observed_order'])}, which {'lies' if v['holds'] else 'does not lie'} within 4 ± {band:g} "
+        items.append(f"**RK4 order {text}: {', '.join(fmt_number(p) for p in o['observed_order'])}** for h from "
+                     f"{fmt_number(o['h_coarse'].max())} to {fmt_number(o['h_fine'].min())} s; the finest pair gives "
+                     f"{fmt_number(v['observed_order'])}, which {'lies' if v['holds'] else 'does not lie'} within 4 ± {band:g} "
                      f"(`reference/tolerances.toml` [rk4_order_band]): "
                      + ("**order 4 confirmed**." if v["holds"] else "**order 4 not reached**."))
     return ["### Reading", ""] + [f"- {t}" for t in items] + [""]
