@@ -33,6 +33,10 @@ $(SLOW_PASSED): $(STAMP) $(SOURCES)
 run: $(STAMP)
 	$(PY) -m study run $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
+# Accuracy per CPU second, in-house vs Exudyn, measured side by side -> reports/benchmarks/
+bench: $(STAMP)
+	$(PY) -m study.bench
+
 errata: $(STAMP)
 	$(PY) -m study errata
 

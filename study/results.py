@@ -23,7 +23,7 @@ import pandas as pd
 Array = np.ndarray
 
 # Packages whose versions go into every result's metadata.
-TRACKED_PACKAGES = ("study", "numpy", "scipy", "sympy", "pandas", "exudyn")
+TRACKED_PACKAGES = ("study", "numpy", "scipy", "sympy", "pandas", "exudyn", "numba")
 
 
 def package_versions() -> dict[str, str]:

@@ -18,6 +18,8 @@ from study.solver.stabilization import make_stabilization
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
 DEFAULT_OUTPUT_STEP = 0.01
+# 'reference': Python + scipy (the default); 'compiled': study.fast (numba).
+BACKENDS = ("reference", "compiled")
 
 
 def _check_positive(name: str, value) -> None:
@@ -57,6 +59,7 @@ def simulate(
     friction: str | None = None,
     friction_eps: float = 1e-3,
     friction_sgn: str = "tanh",
+    backend: str = "reference",
     **method_options,
 ) -> SimulationResult:
     """Simulate a constrained mechanism.
@@ -86,6 +89,10 @@ def simulate(
         'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps`` also sets the
         band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. The result gains
         forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
+    backend : {'reference', 'compiled'}
+        'reference': the Python solver with scipy's integrators. 'compiled': generated numba code and a
+        compiled integration loop (``study.fast``; built-in mechanisms, multiplier solver, RK23/RK45/
+        DOP853/RK4); an unsupported combination raises a ValueError naming the option.
 
     Returns
     -------
@@ -109,6 +116,15 @@ def simulate(
         qd0 = state.qd if qd0 is None else qd0
     q0, qd0 = as_state(q0, qd0, eom.n_coordinates)
     eom.check_shapes(q0, qd0)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
+    if backend == "compiled":
+        from study.fast import simulate_compiled
+
+        return simulate_compiled(eom, ps, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
+                                 step=step, output_step=output_step, acceleration_solver=acceleration_solver,
+                                 progress=progress, friction=friction, friction_eps=friction_eps,
+                                 friction_sgn=friction_sgn, **method_options)
 
     stabilization = make_stabilization(method, **method_options)
     law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
@@ -159,7 +175,16 @@ def simulate(
     })
     if switching is not None:
         result.stats["friction_transitions"] = switching.transitions
-    result.meta.update({
+    result.meta.update(run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
+                                    acceleration_solver=acceleration_solver, output_step=output_step,
+                                    t_end=t_end, stabilization=stabilization, law=law))
+    return result
+
+
+def run_metadata(eom: EquationsOfMotion, ps, *, integrator: str, rtol: float, atol: float, step: float | None,
+                 acceleration_solver: str, output_step: float, t_end: float, stabilization, law) -> dict:
+    """The settings of an in-house run, as stored in ``SimulationResult.meta`` (both backends)."""
+    return {
         "engine": "in-house",
         "mechanism": ps.mechanism if ps else eom.name,
         "variant": ps.variant if ps else None,
@@ -174,8 +199,7 @@ def simulate(
         **stabilization.settings(),
         **(law.settings() if law is not None else {"friction": None}),
         "versions": package_versions(),
-    })
-    return result
+    }
 
 
 def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) -> SimulationResult:

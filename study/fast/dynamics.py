@@ -1,0 +1,295 @@
+"""The compiled right-hand side: stabilization bias, multiplier solve and the coupled friction solve.
+
+Same equations as ``study.solver.dynamics.Dynamics`` with the ``multiplier`` acceleration solver and
+``study.solver.friction.FrictionDynamics``::
+
+    [[M, Phi_q^T], [Phi_q, 0]] [qdd; lambda] = [Q + sum_j Jt_j^T f_j; gamma + b(Phi, Phidot)]
+
+with the contacts' tangential forces f found per normal-force sign hypothesis by superposition
+(see the reference module's docstring; the hypotheses are visited in the same order and the same
+consistency rule picks exactly one, else a Painleve status is returned).
+
+Options travel in two arrays, ``ci`` (int64) and ``cf`` (float64), whose layout is given by the
+``CI_*`` / ``CF_*`` constants below and packed by ``study.fast.frontend``. State y = [q, qd, W_loads,
+W_friction (only with friction)], as in the reference.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit, types
+
+from study.fast.linalg import lu_factor, lu_solve
+from study.fast.signatures import EVALUATE_T, I1, V1, f8
+
+# --- option layout ---------------------------------------------------------------------------
+STAB_NONE, STAB_BAUMGARTE, STAB_SLIDING, STAB_PROJECTION = 0, 1, 2, 3
+FRICTION_NONE, FRICTION_EXACT, FRICTION_REGULARIZED, FRICTION_SIGN = 0, 1, 2, 3
+CI_STAB, CI_SGN, CI_FRICTION, CI_FRICTION_SGN, CI_PROJ_MASS, CI_PROJ_MAXITER, CI_NLOADMODE, CI_CONTACT0 = range(8)
+CF_BG_DAMP, CF_BG_STIFF, CF_SM_WIDTH, CF_FRICTION_EPS, CF_PROJ_TOL, CF_HEADER = 0, 1, 2, 3, 4, 5
+# ci ends with the dimensions (nw, nc, r, m): see dimensions()
+# cf after the header: Lambda (r), K (r), k (r), mu_kinetic (nc), mu_static (nc), resistance (nc)
+
+# status codes
+OK, SINGULAR, PAINLEVE_NONE, PAINLEVE_MANY = 0, 1, 2, 3
+# as study.solver.friction.CONSISTENCY_RTOL (see its reason there)
+CONSISTENCY_RTOL = 1e-10
+
+Workspace = namedtuple("Workspace", [
+    "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "K", "piv", "x",
+    "qdd", "lam", "U", "L", "A", "b", "pivA", "fa", "best", "sigma", "best_sigma", "normal", "tol",
+    "best_normal", "best_tol", "f", "vt", "stick", "s", "counters"])
+
+
+@njit(cache=True)
+def workspace(m, r, nc, nw):
+    """Every array one evaluation needs, allocated once per integration."""
+    n = m + r
+    return Workspace(
+        np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m), np.zeros(r), np.zeros((r, m)), np.zeros(r),
+        np.zeros((nc, m)), np.zeros(nc), np.zeros(nw), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64),
+        np.zeros(n), np.zeros(m), np.zeros(r), np.zeros((m, nc)), np.zeros((r, nc)), np.zeros((nc, nc)),
+        np.zeros(nc), np.zeros(nc, np.int64), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
+        np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
+        np.zeros(nc, np.bool_), np.zeros(nc), np.zeros(4, np.int64))
+
+
+@njit(cache=True)
+def dimensions(ci):
+    """(m, r, nc, nw): coordinates, constraints, contacts, load works, stored at the end of ci."""
+    k = ci.size
+    return ci[k - 1], ci[k - 2], ci[k - 3], ci[k - 4]
+
+
+@njit(cache=True)
+def sign_function(kind, s, width):
+    """SIGN_FUNCTIONS in order: 0 sign, 1 sat, 2 tanh, 3 arctan, 4 sqrt (width: eps or 1/c)."""
+    if kind == 0:
+        return 0.0 if s == 0.0 else (1.0 if s > 0.0 else -1.0)
+    if kind == 1:
+        return min(1.0, max(-1.0, s / width))
+    if kind == 2:
+        return math.tanh(s / width)
+    if kind == 3:
+        return (2.0 / math.pi) * math.atan(s / width)
+    return s / math.sqrt(s * s + width * width)
+
+
+@njit(cache=True)
+def constraint_rhs(ci, cf, ws):
+    """ws.c = gamma + b(Phi, Phidot) of the stabilization method (study.solver.stabilization)."""
+    r, m = ws.J.shape
+    kind = ci[CI_STAB]
+    for i in range(r):
+        phidot = 0.0
+        for j in range(m):
+            phidot += ws.J[i, j] * ws.qd[j]
+        b = 0.0
+        if kind == STAB_BAUMGARTE:
+            b = -cf[CF_BG_DAMP] * phidot - cf[CF_BG_STIFF] * ws.phi[i]
+        elif kind == STAB_SLIDING:
+            lam, K, k = cf[CF_HEADER + i], cf[CF_HEADER + r + i], cf[CF_HEADER + 2 * r + i]
+            s = phidot + lam * ws.phi[i]
+            b = -lam * phidot - K * s - k * sign_function(ci[CI_SGN], s, cf[CF_SM_WIDTH])
+        ws.c[i] = ws.gamma[i] + b
+
+
+@njit(cache=True)
+def _phases(ci, cf, mode, ws):
+    """Stick flags and slip factors s of the contacts (exact: from the mode; else the sgn law of v_t)."""
+    nc = ws.Jt.shape[0]
+    kind, nlm = ci[CI_FRICTION], ci[CI_NLOADMODE]
+    for j in range(nc):
+        if kind == FRICTION_EXACT:
+            ws.stick[j] = mode[nlm + 2 * j] > 0
+            ws.s[j] = 0.0 if ws.stick[j] else float(mode[nlm + 2 * j + 1])
+        else:
+            ws.stick[j] = False
+            sgn = ci[CI_FRICTION_SGN] if kind == FRICTION_REGULARIZED else 0
+            ws.s[j] = sign_function(sgn, ws.vt[j], cf[CF_FRICTION_EPS])
+
+
+@njit(cache=True)
+def _friction(ci, cf, ws, m, r):
+    """The coupled normal-force / friction problem (study.solver.friction.FrictionDynamics._solve)."""
+    nc = ws.Jt.shape[0]
+    off = CF_HEADER + 3 * r
+    n_act = 0
+    active = np.empty(nc, np.int64)
+    for j in range(nc):
+        if ws.stick[j] or ws.s[j] != 0.0:
+            active[n_act] = j
+            n_act += 1
+    for j in range(nc):
+        ws.f[j] = 0.0
+    if n_act == 0:
+        for j in range(nc):
+            ws.normal[j] = -ws.lam[ci[CI_CONTACT0 + j]]
+        return OK
+    for col in range(n_act):  # response to a unit tangential force at contact active[col]
+        j = active[col]
+        for i in range(m):
+            ws.x[i] = ws.Jt[j, i]
+        for i in range(r):
+            ws.x[m + i] = 0.0
+        lu_solve(ws.K, ws.piv, ws.x)
+        for i in range(m):
+            ws.U[i, col] = ws.x[i]
+        for i in range(r):
+            ws.L[i, col] = ws.x[m + i]
+    assumed = np.empty(n_act, np.int64)
+    n_ass = 0
+    for col in range(n_act):
+        j = active[col]
+        if not ws.stick[j] and cf[off + j] > 0.0:
+            assumed[n_ass] = col
+            n_ass += 1
+    n_good = 0
+    A, b = ws.A[:n_act, :n_act], ws.b[:n_act]
+    for combo in range(1 << n_ass):  # itertools.product((1, -1), ...) order
+        for col in range(n_act):
+            ws.sigma[col] = 0.0
+        for a in range(n_ass):
+            ws.sigma[assumed[a]] = -1.0 if (combo >> (n_ass - 1 - a)) & 1 else 1.0
+        for row in range(n_act):
+            j = active[row]
+            kj = ci[CI_CONTACT0 + j]
+            if ws.stick[j]:
+                acc = ws.bt[j]
+                for i in range(m):
+                    acc += ws.Jt[j, i] * ws.qdd[i]
+                for col in range(n_act):
+                    v = 0.0
+                    for i in range(m):
+                        v += ws.Jt[j, i] * ws.U[i, col]
+                    A[row, col] = v
+                b[row] = -acc
+            else:
+                w = ws.s[j] * cf[off + j] * ws.sigma[row]
+                for col in range(n_act):
+                    A[row, col] = -w * ws.L[kj, col]
+                A[row, row] += 1.0
+                b[row] = -ws.s[j] * cf[off + 2 * nc + j] + w * ws.lam[kj]
+        if not lu_factor(A, ws.pivA):
+            continue
+        lu_solve(A, ws.pivA, b)
+        consistent = True
+        for row in range(n_act):
+            kj = ci[CI_CONTACT0 + active[row]]
+            lam_k, scale = ws.lam[kj], abs(ws.lam[kj])
+            for col in range(n_act):
+                lam_k += ws.L[kj, col] * b[col]
+                scale += abs(ws.L[kj, col]) * abs(b[col])
+            ws.normal[row] = -lam_k
+            ws.tol[row] = CONSISTENCY_RTOL * scale
+            if ws.sigma[row] != 0.0 and ws.sigma[row] * ws.normal[row] < -ws.tol[row]:
+                consistent = False
+        if not consistent:
+            continue
+        if n_good == 0:
+            for row in range(n_act):
+                ws.best[row], ws.best_sigma[row] = b[row], ws.sigma[row]
+                ws.best_normal[row], ws.best_tol[row] = ws.normal[row], ws.tol[row]
+        else:  # agree only if every contact whose assumed sign differs is grazing (N = 0) in both
+            for row in range(n_act):
+                if ws.sigma[row] != ws.best_sigma[row]:
+                    if abs(ws.normal[row]) > ws.tol[row] or abs(ws.best_normal[row]) > ws.best_tol[row]:
+                        return PAINLEVE_MANY
+        n_good += 1
+    if n_good == 0:
+        return PAINLEVE_NONE
+    for col in range(n_act):
+        fa = ws.best[col]
+        ws.f[active[col]] = fa
+        for i in range(m):
+            ws.qdd[i] += ws.U[i, col] * fa
+        for i in range(r):
+            ws.lam[i] += ws.L[i, col] * fa
+    for j in range(nc):
+        ws.normal[j] = -ws.lam[ci[CI_CONTACT0 + j]]
+    return OK
+
+
+@njit(cache=True)
+def accelerations(evaluate, t, mode, p, lp, ci, cf, ws):
+    """qdd, lambda (and with friction f, v_t, N) at the state in ws.q, ws.qd; returns a status code."""
+    evaluate(t, ws.q, ws.qd, mode, p, lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
+    ws.counters[0] += 1
+    m, r = ws.q.size, ws.phi.size
+    constraint_rhs(ci, cf, ws)
+    K = ws.K
+    for i in range(m):
+        for j in range(m):
+            K[i, j] = ws.M[i, j]
+        for k in range(r):
+            K[i, m + k] = ws.J[k, i]
+            K[m + k, i] = ws.J[k, i]
+    for k in range(r):
+        for kk in range(r):
+            K[m + k, m + kk] = 0.0
+    if not lu_factor(K, ws.piv):
+        return SINGULAR
+    for i in range(m):
+        ws.x[i] = ws.Q[i]
+    for k in range(r):
+        ws.x[m + k] = ws.c[k]
+    lu_solve(K, ws.piv, ws.x)
+    for i in range(m):
+        ws.qdd[i] = ws.x[i]
+    for k in range(r):
+        ws.lam[k] = ws.x[m + k]
+    if ci[CI_FRICTION] == FRICTION_NONE:
+        return OK
+    nc = ws.Jt.shape[0]
+    for j in range(nc):
+        v = 0.0
+        for i in range(m):
+            v += ws.Jt[j, i] * ws.qd[i]
+        ws.vt[j] = v
+    _phases(ci, cf, mode, ws)
+    return _friction(ci, cf, ws, m, r)
+
+
+@njit(cache=True)
+def rhs(evaluate, t, y, mode, p, lp, ci, cf, ws, dy):
+    """dy = [qd, qdd, load powers, friction powers f_j v_t,j]; returns a status code."""
+    m = ws.q.size
+    for i in range(m):
+        ws.q[i] = y[i]
+        ws.qd[i] = y[m + i]
+    status = accelerations(evaluate, t, mode, p, lp, ci, cf, ws)
+    for i in range(m):
+        dy[i] = ws.qd[i]
+        dy[m + i] = ws.qdd[i]
+    nw = ws.powers.size
+    for k in range(nw):
+        dy[2 * m + k] = ws.powers[k]
+    if ci[CI_FRICTION] != FRICTION_NONE:
+        for j in range(ws.Jt.shape[0]):
+            dy[2 * m + nw + j] = ws.f[j] * ws.vt[j]
+    return status
+
+
+@njit(types.int64(EVALUATE_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
+def accelerations_entry(evaluate, t, q, qd, mode, p, lp, ci, cf, out, repeat):
+    """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f]. For tests and timing."""
+    m, r, nc, nw = dimensions(ci)
+    ws = workspace(m, r, nc, nw)
+    status = 0
+    for _ in range(repeat):
+        for i in range(m):
+            ws.q[i] = q[i]
+            ws.qd[i] = qd[i]
+        status = accelerations(evaluate, t, mode, p, lp, ci, cf, ws)
+    for i in range(m):
+        out[i] = ws.qdd[i]
+    for k in range(r):
+        out[m + k] = ws.lam[k]
+    if ci[CI_FRICTION] != FRICTION_NONE:
+        for j in range(nc):
+            out[m + r + j] = ws.normal[j]
+            out[m + r + nc + j] = ws.f[j]
+    return status

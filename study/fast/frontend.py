@@ -1,0 +1,254 @@
+"""Python side of the compiled path: what it supports, packing of options, segments and events, result.
+
+``simulate(..., backend='compiled')`` calls :func:`simulate_compiled`. It supports the built-in
+mechanisms (their description is needed to generate code), the ``multiplier`` acceleration solver,
+every stabilization (none, baumgarte, sliding_mode with every sgn approximation, projection),
+friction None / 'regularized' / 'sign' / 'exact', and the integrators RK23, RK45, DOP853 (scipy's
+error control) and RK4. Anything else raises a ValueError naming the option: there is no silent
+fallback. Switches are located in the compiled loop; the new mode is set here (loads: the crossing
+entry flips; exact friction: ``study.solver.friction.StickSlipSwitching.on_event``, the reference
+rule), then the next segment starts. Samples are post-processed by the reference
+``assemble_result``, so a result has exactly the reference's fields.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from study.fast.codegen import generated_module
+from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
+                                 STAB_BAUMGARTE, STAB_NONE, STAB_PROJECTION, STAB_SLIDING, accelerations_entry)
+from study.fast.loads import load_specs, load_vector
+from study.fast.loop import DONE, FAIL_PROJECTION, FAIL_RHS, FAIL_STEP, integrate_segment
+from study.fast.steppers import METHOD_IDS, tableau
+from study.model.eom import EquationsOfMotion
+from study.params import ParameterSet
+from study.results import SimulationResult
+from study.simulate import assemble_result, run_metadata
+from study.solver.dynamics import Dynamics
+from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
+from study.solver.integrate import MAX_EVENTS, initial_mode
+from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization, make_stabilization
+
+SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
+SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
+_SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}  # order of dynamics.sign_function
+_STAB_IDS = {"none": STAB_NONE, "baumgarte": STAB_BAUMGARTE, "sliding_mode": STAB_SLIDING,
+             "projection": STAB_PROJECTION}
+_FRICTION_IDS = {None: FRICTION_NONE, "exact": FRICTION_EXACT, "regularized": FRICTION_REGULARIZED,
+                 "sign": FRICTION_SIGN}
+_FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
+             FAIL_RHS: "the acceleration problem failed (singular saddle-point system or a Painleve case of "
+                       "the friction solve)",
+             FAIL_PROJECTION: "the projection failed (singular system or no convergence)"}
+
+
+@dataclass(frozen=True)
+class CompiledModel:
+    """Generated numba functions of one parameter set, with the numbers they read.
+
+    Attributes
+    ----------
+    module : the generated module (``evaluate``, ``indicators``, ``kinematics``)
+    p : (k,) parameter vector in ``module.PARAMETERS`` order
+    lp : load parameters (``study.fast.loads.load_vector``)
+    n_load_indicators : switching functions of the loads
+    """
+
+    module: ModuleType
+    p: np.ndarray
+    lp: np.ndarray
+    n_load_indicators: int
+    work_names: tuple[str, ...]
+
+
+_MODELS: dict[str, CompiledModel] = {}
+
+
+def compiled_model(ps: ParameterSet) -> CompiledModel:
+    """The compiled model of a built-in mechanism's parameter set (generated once, then from disk)."""
+    if ps.sha256 not in _MODELS:
+        from study.mechanisms import module as mechanism_module
+
+        b = mechanism_module(ps.mechanism).describe(ps)
+        b.validate()
+        torques, points = load_specs(b)
+        mod = generated_module(b, torques, points)
+        p = np.array([float(b.values[k]) for k in mod.PARAMETERS])
+        names = tuple(pt.name for pt in points) + tuple(t.name for t in torques)  # the reference's work order
+        _MODELS[ps.sha256] = CompiledModel(mod, p, load_vector(torques, points), mod.N_LOAD_INDICATORS, names)
+    return _MODELS[ps.sha256]
+
+
+def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,
+                 n_load_modes: int) -> tuple[np.ndarray, np.ndarray]:
+    """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``."""
+    r, nc = eom.n_constraints, len(eom.contacts)
+    s = stabilization
+    friction = None if law is None else law.name
+    ci = [_STAB_IDS[s.name], _SIGN_IDS.get(getattr(s, "sgn", "sign"), 0), _FRICTION_IDS[friction],
+          _SIGN_IDS.get(getattr(law, "sgn", "sign"), 0), int(getattr(s, "weighting", "") == "mass"),
+          int(getattr(s, "max_iter", 0)), n_load_modes]
+    ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
+    d, omega = getattr(s, "d", 0.0), getattr(s, "omega", 0.0)
+    cf = [2.0 * d * omega, omega ** 2, getattr(s, "width", 1.0), getattr(law, "eps", 1.0), getattr(s, "tol", 0.0)]
+    for key in ("Lambda", "K", "k"):
+        cf += list(np.broadcast_to(np.asarray(getattr(s, key, 0.0), dtype=float), (r,)))
+    cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
+    cf += [c.resistance for c in eom.contacts]
+    return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
+
+
+def check_supported(ps: ParameterSet | None, integrator: str, acceleration_solver: str, progress) -> None:
+    """ValueError naming every option the compiled backend does not support."""
+    problems = []
+    if ps is None:
+        problems.append("eom_or_mechanism: a user's EquationsOfMotion has no symbolic description to compile; "
+                        "give a built-in mechanism name ('slider_crank', 'quick_return')")
+    if integrator not in SUPPORTED_INTEGRATORS:
+        problems.append(f"integrator={integrator!r} (compiled: {', '.join(SUPPORTED_INTEGRATORS)})")
+    if acceleration_solver not in SUPPORTED_ACCELERATION_SOLVERS:
+        problems.append(f"acceleration_solver={acceleration_solver!r} (compiled: "
+                        f"{', '.join(SUPPORTED_ACCELERATION_SOLVERS)})")
+    if progress is not None:
+        problems.append("progress= (the compiled loop does not call back into Python)")
+    if problems:
+        raise ValueError("backend='compiled' does not support " + "; ".join(problems) + "; use backend='reference'")
+
+
+@dataclass
+class Setup:
+    """Everything one compiled run needs (reference dynamics for modes, switching and post-processing)."""
+
+    model: CompiledModel
+    dyn: Dynamics
+    ci: np.ndarray
+    cf: np.ndarray
+    y0: np.ndarray
+    switching: StickSlipSwitching | None
+    n_load_modes: int
+
+
+def setup(eom: EquationsOfMotion, ps: ParameterSet, q0, qd0, method: str, friction, friction_eps, friction_sgn,
+          acceleration_solver: str = "multiplier", **method_options) -> Setup:
+    """Build the reference dynamics (as ``study.simulate.simulate``) and the compiled option arrays."""
+    from study.solver.accelerations import make_acceleration_solver
+
+    model = compiled_model(ps)
+    stabilization = make_stabilization(method, **method_options)
+    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
+    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
+    n_load = model.n_load_indicators
+    if work_names != model.work_names:
+        raise ValueError(f"backend='compiled': the loads {work_names} of the equations differ from the compiled "
+                         f"description's {model.work_names}; the equations must come from the parameter set")
+    if law is None:
+        dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
+        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
+    else:
+        dyn = FrictionDynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names,
+                               law=law, n_load_modes=n_load)
+        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
+    ci, cf = pack_options(eom, stabilization, law, len(work_names), n_load)
+    switching = StickSlipSwitching(dyn) if law is not None and law.switched else None
+    return Setup(model, dyn, ci, cf, y0, switching, n_load)
+
+
+def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.ndarray:
+    """[qdd, lambda, N, f] at one state from the compiled kernels (``repeat`` times, for timing)."""
+    m, r, nc = s.dyn.eom.n_coordinates, s.dyn.eom.n_constraints, len(s.dyn.eom.contacts)
+    out = np.zeros(m + r + 2 * nc)
+    status = accelerations_entry(s.model.module.evaluate, float(t), np.ascontiguousarray(q, dtype=float),
+                                 np.ascontiguousarray(qd, dtype=float), np.asarray(mode, dtype=np.int64),
+                                 s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
+    if status != 0:
+        raise RuntimeError(f"compiled acceleration solve failed at t = {t}: {_FAILURES[FAIL_RHS]}")
+    return out
+
+
+def output_times(t_end: float, output_step: float) -> np.ndarray:
+    """The sampling grid of ``study.simulate.simulate``: k * output_step, plus t_end."""
+    n_out = int(np.floor(t_end / output_step + 1e-9))
+    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
+    t_out[-1] = min(t_out[-1], t_end)
+    return t_out
+
+
+def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step):
+    """Integrate with the compiled loop; returns (t, y, modes, stats) of the samples."""
+    eom, model = s.dyn.eom, s.model
+    m = eom.n_coordinates
+    tab = tableau(integrator)
+    arrays, (n_stages, order, n_rows) = tab[:7], tab[7:]
+    if s.switching is not None:
+        mode = tuple(s.switching.initial_mode(0.0, s.y0.copy()))
+    elif s.n_load_modes:
+        def indicators(t, y):
+            return eom.indicators(t, y[:m], y[m:2 * m])
+        mode = initial_mode(indicators, 0.0, s.y0, s.dyn.rhs)
+    else:
+        mode = ()
+    n_mode = len(mode)
+    y_out = np.zeros((len(t_out), len(s.y0)))
+    mode_out = np.zeros((len(t_out), max(n_mode, 1)), dtype=np.int64)
+    counters = np.array([0, 0, 0, 0, 1], dtype=np.int64)
+    y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
+    events, restarts = [], 0
+    first = float(step) if step is not None else 0.0
+    while True:
+        outcome, t_reached, i_event = integrate_segment(
+            model.module.evaluate, model.module.indicators, model.module.kinematics, METHOD_IDS[integrator],
+            arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
+            np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
+            y_out, mode_out, counters, y_end)
+        restarts += 1
+        if outcome < 0:
+            raise RuntimeError(f"{integrator} (compiled) failed at t = {t_reached:.9g}: {_FAILURES[outcome]}; "
+                               f"rerun with backend='reference' for a diagnosis")
+        if outcome == DONE:
+            break
+        t, y = float(t_reached), y_end.copy()
+        if s.switching is not None:
+            mode = tuple(s.switching.on_event(t, y, mode, int(i_event)))
+        else:
+            flipped = list(mode)
+            flipped[i_event] = -flipped[i_event]
+            mode = tuple(flipped)
+        events.append({"t": t, "indicator": int(i_event), "new_sign": mode[i_event]})
+        if len(events) > MAX_EVENTS:
+            raise RuntimeError(f"more than {MAX_EVENTS} switches by t = {t:.9g}: the solution chatters on "
+                               f"switching function {i_event}")
+    k = int(counters[0])
+    modes = [tuple(int(v) for v in row[:n_mode]) if n_mode else None for row in mode_out[:k]]
+    stats = {"steps": int(counters[1]), "nfev": int(counters[2]), "projections": int(counters[3]),
+             "restarts": restarts, "events": len(events), "event_times": [e["t"] for e in events]}
+    return t_out[:k].copy(), y_out[:k].copy(), modes, stats
+
+
+def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, t_end: float, *, method: str,
+                      integrator: str, rtol: float, atol: float, step, output_step: float,
+                      acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
+                      **method_options) -> SimulationResult:
+    """The compiled backend of ``study.simulate.simulate`` (arguments already checked there)."""
+    check_supported(ps, integrator, acceleration_solver, progress)
+    s = setup(eom, ps, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
+    t_out = output_times(float(t_end), output_step)
+    cpu0 = time.process_time()
+    t, y, modes, stats = run(s, float(t_end), t_out, integrator, rtol, atol, step)
+    cpu = time.process_time() - cpu0
+    result = assemble_result(s.dyn, t, y, modes)
+    result.stats.update({**stats, "cpu_seconds": cpu})
+    if s.switching is not None:
+        result.stats["friction_transitions"] = s.switching.transitions
+    law = s.dyn.law if isinstance(s.dyn, FrictionDynamics) else None
+    result.meta.update({
+        **run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
+                       acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
+                       stabilization=s.dyn.stabilization, law=law),
+        "backend": "compiled",
+    })
+    return result

@@ -1,0 +1,271 @@
+"""The compiled integration loop: adaptive step control, located switches, projection, sampling.
+
+:func:`integrate_segment` advances from t0 until ``t_end`` or the first switch, exactly as one
+restart of ``study.solver.integrate.integrate``:
+
+1. after each accepted step the switching functions are checked; a sign change is located on the
+   step's interpolant with Brent's method (scipy's ``brentq`` algorithm, same tolerances), the
+   samples before it are written, and the segment returns the event to the caller, which sets
+   the new mode and starts the next segment (so the integrator restarts at the switch);
+2. the post-step projection is applied (stabilization ``projection``);
+3. the requested output times inside the step are sampled from the interpolant.
+
+Only the samples are stored (``y_out``, preallocated by the caller): memory is bounded by the
+requested output, not by the number of steps.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+
+from study.fast.dynamics import (CF_HEADER, CI_FRICTION, CI_NLOADMODE, CI_STAB, FRICTION_EXACT, STAB_PROJECTION,
+                                 accelerations, dimensions, rhs, workspace)
+from study.fast.project import project
+from study.fast.signatures import EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, V1, V2, f8, i8
+from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
+                                 dense_setup, error_norm, select_initial_step, stages)
+
+# segment outcomes (>= 0) and failures (< 0)
+DONE, EVENT = 0, 1
+FAIL_STEP, FAIL_RHS, FAIL_PROJECTION = -1, -2, -3
+BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER = 1e-14, 4 * np.finfo(float).eps, 100  # as the reference loop
+SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
+
+TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
+SEGMENT = types.Tuple((i8, f8, i8))(
+    EVALUATE_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1, V1, I1, V1,
+    V1, V2, types.Array(i8, 2, "C"), I1, V1)
+
+
+@njit(cache=True)
+def event_values(evaluate, indicators, t, y, mode, p, lp, ci, cf, ws, out):
+    """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact)."""
+    m, nlm = ws.q.size, ci[CI_NLOADMODE]
+    for i in range(m):
+        ws.q[i] = y[i]
+        ws.qd[i] = y[m + i]
+    if nlm > 0:
+        indicators(t, ws.q, ws.qd, p, lp, out[:nlm])
+    if ci[CI_FRICTION] != FRICTION_EXACT:
+        return 0
+    status = accelerations(evaluate, t, mode, p, lp, ci, cf, ws)
+    nc, r = ws.Jt.shape[0], ws.phi.size
+    off = CF_HEADER + 3 * r
+    for j in range(nc):
+        direction = float(mode[nlm + 2 * j + 1])
+        if mode[nlm + 2 * j] > 0:  # stick: R + mu_s |N| - |f|
+            out[nlm + 2 * j] = cf[off + 2 * nc + j] + cf[off + nc + j] * abs(ws.normal[j]) - abs(ws.f[j])
+        else:
+            out[nlm + 2 * j] = -direction * ws.vt[j]
+        out[nlm + 2 * j + 1] = direction
+    return status
+
+
+@njit(cache=True)
+def _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp, g):
+    dense_eval(method, D, n_rows, y_old, (s - t_old) / h, ytmp)
+    event_values(evaluate, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
+    return g[i]
+
+
+@njit(cache=True)
+def locate(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, mode, p, lp, ci, cf, ws, ytmp, g):
+    """Zero of switching function i on [xa, xb] along the interpolant (scipy's brentq algorithm)."""
+    xpre, xcur = xa, xb
+    xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
+    fpre = _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xpre, i, mode, p, lp, ci, cf, ws, ytmp, g)
+    fcur = _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws, ytmp, g)
+    if fpre == 0.0:
+        return xpre
+    if fcur == 0.0:
+        return xcur
+    for _ in range(BRENT_MAXITER):
+        if fpre != 0.0 and fcur != 0.0 and (np.signbit(fpre) != np.signbit(fcur)):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (BRENT_XTOL + BRENT_RTOL * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0.0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
+                spre, scur = scur, stry
+            else:
+                spre, scur = sbis, sbis
+        else:
+            spre, scur = sbis, sbis
+        xpre, fpre = xcur, fcur
+        if abs(scur) > delta:
+            xcur += scur
+        else:
+            xcur += delta if sbis > 0 else -delta
+        fcur = _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws, ytmp, g)
+    return xcur
+
+
+@njit(cache=True)
+def _store(kinematics, t, y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters):
+    k = counters[0]
+    for i in range(y.size):
+        y_out[k, i] = y[i]
+    if ci[CI_STAB] == STAB_PROJECTION:
+        yk = y.copy()
+        changed, status = project(kinematics, yk, p, ci, cf, m, r)
+        if status != 0:
+            return status
+        for i in range(y.size):
+            y_out[k, i] = yk[i]
+    for i in range(mode.size):
+        mode_out[k, i] = mode[i]
+    counters[0] = k + 1
+    return 0
+
+
+@njit(cache=True)
+def _due(t_out, k, t_hi):
+    return k < t_out.size and (t_out[k] < t_hi or abs(t_out[k] - t_hi) <= SAMPLE_ATOL * max(1.0, abs(t_hi)))
+
+
+@njit(SEGMENT, cache=True)
+def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0, t_end,
+                      first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end):
+    """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
+
+    counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0)]; updated in place.
+    Returns (outcome, t reached, index of the switching function that crossed or -1); the state
+    reached is written to y_end.
+    """
+    n = y0.size
+    m, r, nc, nw = dimensions(ci)
+    ws = workspace(m, r, nc, nw)
+    n_events = ci[CI_NLOADMODE] + (2 * nc if ci[CI_FRICTION] == FRICTION_EXACT else 0)
+    projecting = ci[CI_STAB] == STAB_PROJECTION
+    n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
+    K = np.zeros((max(n_k, 4), n))
+    D = np.zeros((max(n_rows, 4), n))
+    y, y_new, f, f_new, tmp = y0.copy(), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    g_new, g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
+    t = t0
+    if rhs(evaluate, t, y, mode, p, lp, ci, cf, ws, f) != 0:
+        return FAIL_RHS, t, -1
+    if counters[4] == 1:
+        counters[4] = 0
+        while _due(t_out, counters[0], t):
+            if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+                return FAIL_PROJECTION, t, -1
+    if method == RK4_ID:
+        h_abs = first_step
+    elif first_step > 0:
+        h_abs = first_step
+    else:
+        h_abs, status = select_initial_step(evaluate, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci, cf, ws,
+                                            tmp, f_new)
+        if status != 0:
+            return FAIL_RHS, t, -1
+    exponent = -1.0 / (order + 1)
+    while t < t_end:
+        t_old = t
+        # --- one accepted step ---------------------------------------------------------------
+        if method == RK4_ID:
+            h = min(h_abs, t_end - t)
+            for i in range(n):
+                K[0, i] = f[i]
+            if stages(evaluate, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
+                return FAIL_RHS, t, -1
+            combine(tab, 4, y, h, K, y_new)
+            t_new = t + h
+            if rhs(evaluate, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+                return FAIL_RHS, t, -1
+        else:
+            min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
+            rejected = False
+            while True:
+                if h_abs < min_step:
+                    return FAIL_STEP, t, -1
+                t_new = min(t + h_abs, t_end)
+                h = t_new - t
+                h_abs = abs(h)
+                for i in range(n):
+                    K[0, i] = f[i]
+                if stages(evaluate, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws, tmp) != 0:
+                    return FAIL_RHS, t, -1
+                combine(tab, n_stages, y, h, K, y_new)
+                if rhs(evaluate, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+                    return FAIL_RHS, t, -1
+                for i in range(n):
+                    K[n_stages, i] = f_new[i]
+                err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
+                if err < 1:
+                    factor = MAX_FACTOR if err == 0 else min(MAX_FACTOR, SAFETY * err ** exponent)
+                    if rejected:
+                        factor = min(1.0, factor)
+                    h_abs *= factor
+                    break
+                h_abs *= max(MIN_FACTOR, SAFETY * err ** exponent)
+                rejected = True
+        counters[1] += 1
+        dense_ready = False
+        # --- 1. switches ----------------------------------------------------------------------
+        if n_events > 0:
+            if event_values(evaluate, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
+                return FAIL_RHS, t, -1
+            t_e, i_e = np.inf, -1
+            for i in range(n_events):
+                if g_new[i] * mode[i] < 0:
+                    if not dense_ready:
+                        dense_setup(evaluate, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
+                                    mode, p, lp, ci, cf, ws, tmp)
+                        dense_ready = True
+                    root = locate(evaluate, indicators, method, D, n_rows, t_old, h, y, t_old, t_new, i, mode,
+                                  p, lp, ci, cf, ws, tmp, g_tmp)
+                    if root < t_e:
+                        t_e, i_e = root, i
+            if i_e >= 0:
+                dense_eval(method, D, n_rows, y, (t_e - t_old) / h, y_end)
+                while _due(t_out, counters[0], t_e):
+                    tk = t_out[counters[0]]
+                    dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
+                    if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+                        return FAIL_PROJECTION, t, -1
+                counters[2] += ws.counters[0]
+                return EVENT, t_e, i_e
+        # --- 3. samples (before the projection, as in the reference) ---------------------------
+        while _due(t_out, counters[0], t_new):
+            if not dense_ready:
+                dense_setup(evaluate, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
+                            mode, p, lp, ci, cf, ws, tmp)
+                dense_ready = True
+            tk = t_out[counters[0]]
+            dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
+            if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+                return FAIL_PROJECTION, t, -1
+        # --- 2. projection ------------------------------------------------------------------------
+        if projecting:
+            changed, status = project(kinematics, y_new, p, ci, cf, m, r)
+            if status != 0:
+                return FAIL_PROJECTION, t_new, -1
+            if changed:
+                counters[3] += 1
+                if rhs(evaluate, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+                    return FAIL_RHS, t, -1
+        t = t_new
+        for i in range(n):
+            y[i] = y_new[i]
+            f[i] = f_new[i]
+    while counters[0] < t_out.size and _due(t_out, counters[0], t + 1e-300):
+        if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+            return FAIL_PROJECTION, t, -1
+    for i in range(n):
+        y_end[i] = y[i]
+    counters[2] += ws.counters[0]
+    return DONE, t, -1

@@ -1,0 +1,134 @@
+"""The compiled fast path (study.fast) agrees with the reference path.
+
+Only agreement is tested here, never speed (the benchmark ``python -m study.bench`` measures it).
+The first run compiles the kernels (cached on disk under the cache folder afterwards).
+"""
+
+import numpy as np
+import pytest
+
+from study.fast import frontend
+from study.mechanisms import initial_state, load
+from study.reference_data import tolerance
+from study.simulate import simulate
+
+RTOL, ATOL = 1e-10, 1e-12  # tight, so both paths are close to the exact solution
+
+
+def _setup(mechanism, variant, method="none", friction=None, **options):
+    ps, eom = load(mechanism, variant)
+    st = initial_state(ps, eom)
+    s = frontend.setup(eom, ps, st.q, st.qd, method, friction, 1e-3, "tanh", **options)
+    return s, st
+
+
+def _relative(a, b):
+    return np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300)
+
+
+@pytest.mark.parametrize("method, options", [
+    ("none", {}), ("baumgarte", {"d": 0.7, "omega": 20.0}), ("sliding_mode", {"sgn": "sqrt", "width": 1e-3}),
+])
+def test_quick_return_acceleration_matches_reference(method, options):
+    s, st = _setup("quick_return", "smooth_cutting", method, **options)
+    rng = np.random.default_rng(7)
+    for _ in range(3):  # off the constraint manifold too, so the stabilization terms are non-zero
+        q, qd = st.q + 1e-3 * rng.standard_normal(3), st.qd + 1e-2 * rng.standard_normal(3)
+        t = float(rng.uniform(0, 5))
+        qdd_ref, lam_ref = s.dyn.evaluate(t, q, qd)
+        out = frontend.accelerations(s, t, q, qd)
+        assert _relative(out[:3], qdd_ref) <= tolerance("round_off")
+        assert _relative(out[3:5], lam_ref) <= tolerance("round_off")
+
+
+def test_on_off_cutting_law_in_every_mode_matches_reference():
+    s, st = _setup("quick_return", "seed")
+    for mode in [(-1, 1, 1), (1, 1, 1), (-1, -1, 1), (-1, 1, -1)]:
+        qdd_ref, lam_ref = s.dyn.evaluate(0.3, st.q, st.qd, mode)
+        out = frontend.accelerations(s, 0.3, st.q, st.qd, mode)
+        assert _relative(out[:3], qdd_ref) <= tolerance("round_off")
+
+
+@pytest.mark.parametrize("friction, mode", [("regularized", ()), ("sign", ()), ("exact", (-1, 1)), ("exact", (1, 1))])
+def test_slider_crank_friction_solve_matches_reference(friction, mode):
+    s, st = _setup("slider_crank", "sustained_sliding", friction=friction)
+    qd = st.qd * 300.0  # sliding clearly, so every law has a non-zero friction force
+    sol = s.dyn.contact_solution(0.0, st.q, qd, mode or None)
+    out = frontend.accelerations(s, 0.0, st.q, qd, mode)
+    for got, want in ((out[:2], sol.qdd), (out[2:3], sol.lam), (out[3:4], sol.normal), (out[4:5], sol.friction)):
+        assert _relative(got, want) <= tolerance("round_off")
+
+
+def _both(**kw):
+    return simulate(backend="compiled", **kw), simulate(**kw)
+
+
+def _agree(fast, ref, rtol):
+    # same error control; round-off may flip an accept/reject decision, so steps are not compared
+    assert fast.t.shape == ref.t.shape and np.array_equal(fast.t, ref.t)
+    factor = tolerance("adaptive_global_error_factor") * rtol
+    assert np.abs(fast.q - ref.q).max() <= factor * max(1.0, np.abs(ref.q).max())
+    assert np.abs(fast.qd - ref.qd).max() <= factor * max(1.0, np.abs(ref.qd).max())
+
+
+@pytest.mark.parametrize("integrator, method, options", [
+    ("DOP853", "none", {}), ("RK45", "baumgarte", {}), ("RK45", "sliding_mode", {"sgn": "tanh"}),
+    ("DOP853", "projection", {"weighting": "mass"}),
+])
+def test_quick_return_smooth_trajectory_matches_reference(integrator, method, options):
+    fast, ref = _both(eom_or_mechanism="quick_return", variant="smooth_cutting", t_end=1.0, integrator=integrator,
+                      rtol=RTOL, atol=ATOL, method=method, **options)
+    _agree(fast, ref, RTOL)
+    # projection counts are not compared: whether max|Phi| exceeds 1e-12 after a step is round-off
+    assert np.abs(fast.phi - ref.phi).max() <= tolerance("adaptive_global_error_factor") * RTOL
+
+
+def test_rk4_matches_reference():
+    fast, ref = _both(eom_or_mechanism="quick_return", variant="smooth_cutting", t_end=0.3, integrator="RK4",
+                      step=1e-3)
+    assert np.abs(fast.q - ref.q).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.q).max()
+
+
+def test_on_off_switches_located_at_the_same_times():
+    fast, ref = _both(eom_or_mechanism="quick_return", variant="seed", t_end=1.2, integrator="DOP853",
+                      rtol=RTOL, atol=ATOL)
+    assert fast.stats["events"] == ref.stats["events"] > 0
+    dt = np.abs(np.array(fast.stats["event_times"]) - np.array(ref.stats["event_times"])).max()
+    assert dt <= tolerance("fast_event_time_agreement")
+    _agree(fast, ref, RTOL)
+
+
+@pytest.mark.parametrize("variant, friction", [("sustained_sliding", "regularized"), ("slip_then_stick", "exact")])
+def test_slider_crank_friction_trajectory_matches_reference(variant, friction):
+    fast, ref = _both(eom_or_mechanism="slider_crank", variant=variant, t_end=3.0, integrator="DOP853",
+                      rtol=RTOL, atol=ATOL, friction=friction)
+    assert fast.stats["events"] == ref.stats["events"]
+    if ref.stats["events"]:
+        dt = np.abs(np.array(fast.stats["event_times"]) - np.array(ref.stats["event_times"])).max()
+        assert dt <= tolerance("fast_event_time_agreement")
+    _agree(fast, ref, RTOL)
+    key = "friction_guide"
+    assert np.abs(fast.forces[key] - ref.forces[key]).max() <= tolerance("adaptive_global_error_factor") * RTOL * \
+        max(1.0, np.abs(ref.forces[key]).max())
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    ({"acceleration_solver": "partitioned"}, "acceleration_solver"),
+    ({"integrator": "Radau"}, "integrator"),
+    ({"progress": print}, "progress"),
+])
+def test_unsupported_options_are_refused_by_name(kwargs, word):
+    with pytest.raises(ValueError, match=word):
+        simulate("quick_return", variant="smooth_cutting", t_end=0.1, backend="compiled", **kwargs)
+
+
+def test_user_equations_are_refused():
+    ps, eom = load("quick_return", "smooth_cutting")
+    st = initial_state(ps, eom)
+    with pytest.raises(ValueError, match="EquationsOfMotion"):
+        simulate(eom, st.q, st.qd, t_end=0.1, backend="compiled")
+
+
+def test_unknown_backend():
+    with pytest.raises(ValueError, match="backend"):
+        simulate("quick_return", t_end=0.1, backend="gpu")
