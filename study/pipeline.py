@@ -65,7 +65,7 @@ CODE_PATHS = {
     "inhouse": _COMMON_CODE + ("simulate.py", "fast"),
     "exudyn": _COMMON_CODE + ("exudyn_models",),
 }
-NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
+NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
 _GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude"}
 _FIELD_SWEEPS = ("mechanism", "variant", "t_end")
@@ -189,6 +189,29 @@ def _label(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
+def _excluded(rule: Mapping, fields: Mapping, options: Mapping, where: str) -> bool:
+    """True if every entry of an exclude rule equals the case's field or option of that name."""
+    values = {**options, **fields}
+    for k, v in rule.items():
+        if k not in values and k not in _FIELD_SWEEPS:
+            return False  # an option this case does not set: the rule does not apply to it
+        if values.get(k) != v:
+            return False
+    return True
+
+
+def _check_exclude(g: Mapping, where: str) -> None:
+    """Every key of an exclude rule must be a field or an option some case of the group sets."""
+    known = set(_FIELD_SWEEPS) | set(g.get("options", {})) | set(g.get("sweep", {}))
+    for v in g.get("sweep", {}).values():
+        known |= {kk for item in v if isinstance(item, Mapping) for kk in item}
+    for rule in g.get("exclude", []):
+        unknown = set(rule) - known
+        if unknown:
+            raise CaseListError(f"{where}: exclude rule {dict(rule)} names {sorted(unknown)}, which no case "
+                                f"of the group sets (a misspelling would exclude nothing)")
+
+
 def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
     unknown = set(g) - _GROUP_KEYS
     if unknown:
@@ -201,6 +224,7 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
     for k, values in sweep.items():
         if not isinstance(values, list) or not values:
             raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
+    _check_exclude(g, where)
     cases = []
     for combo in itertools.product(*sweep.values()) if sweep else [()]:
         case_fields, options, labels = dict(fields), dict(g.get("options", {})), []
@@ -212,13 +236,15 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
             else:
                 options[k] = v
             labels.append((k, _label(v)))
-        if any(all(options.get(k) == v for k, v in rule.items()) for rule in g.get("exclude", [])):
+        if any(_excluded(rule, case_fields, options, where) for rule in g.get("exclude", [])):
             continue
         if case_fields["mechanism"] is None or case_fields["t_end"] is None:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
         t_end = case_fields["t_end"]
         if not isinstance(t_end, (int, float)) or not t_end > 0:
             raise CaseListError(f"{where}: t_end = {t_end!r} must be a number > 0 [s]")
+        if engine == "exudyn" and "h" not in options:
+            raise CaseListError(f"{where}: an Exudyn case needs the step 'h' [s] in its options or sweep")
         cases.append(Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"],
                           float(t_end), tuple(sorted(options.items())), tuple(labels)))
     return cases
@@ -276,10 +302,11 @@ def run_case(case: Case) -> SimulationResult:
     return exudyn_models.run(load_parameters(case.mechanism, case.variant), case.t_end, h, **options)
 
 
-def _run_case_timed(case: Case) -> tuple[SimulationResult, float]:
+def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
+    """Run a case; also returns the wall time and the code version of the process that ran it."""
     t0 = time.perf_counter()
     result = run_case(case)
-    return result, time.perf_counter() - t0
+    return result, time.perf_counter() - t0, code_version(case.engine)
 
 
 # --- the cache -----------------------------------------------------------------------------------
@@ -446,7 +473,10 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
     for case, future in _outcomes(executor, todo):
         try:
-            result, wall = future.result()
+            result, wall, worker_code = future.result()
+            if worker_code != code_version(case.engine):  # e.g. a Dask worker with another installed copy
+                raise RuntimeError(f"the worker runs code version {worker_code}, this process "
+                                   f"{code_version(case.engine)}: its result would be saved under a wrong key")
         except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
             error = f"{type(exc).__name__}: {exc}"
             store.record_failure(case, error, "".join(traceback.format_exception(exc)))
@@ -519,14 +549,20 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     record["stages"]["run"] = time.perf_counter() - t0
     for cl in case_lists:
         ts = time.perf_counter()
+        written = Path(cache_root) / "tables" / f"{cl.study}.json"  # the tables this study wrote last time
         try:
             tables = summarize(cl, store)
         except MissingResult as exc:  # a case it needs failed or is missing: say which, go on
             print(f"{cl.study}: summary skipped: {exc}", file=stream)
             record["studies"][cl.study]["summary_error"] = str(exc)
+            for path in json.loads(written.read_text()) if written.exists() else []:
+                Path(path).unlink(missing_ok=True)  # no stale table may pass for a current one
             continue
-        for path in write_tables(tables, reports_dir):
+        paths = write_tables(tables, reports_dir)
+        for path in paths:
             print(f"wrote {path}", file=stream)
+        written.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(written, json.dumps([str(p.resolve()) for p in paths]))
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
     save_record(record, cache_root)

@@ -151,10 +151,7 @@ def simulate(
             q, qd, changed = stabilization.project(eom, y[:m], y[m:2 * m])
             return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
 
-    n_out = int(np.floor(t_end / output_step + 1e-9))
-    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
-    t_out[-1] = min(t_out[-1], t_end)
-
+    t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()
     traj = integrate(dyn.rhs, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
                      step=step, indicators=indicators, post_step=post_step, progress=progress,
@@ -179,6 +176,14 @@ def simulate(
                                     acceleration_solver=acceleration_solver, output_step=output_step,
                                     t_end=t_end, stabilization=stabilization, law=law))
     return result
+
+
+def output_times(t_end: float, output_step: float) -> np.ndarray:
+    """The sampling grid of a run: k * output_step up to t_end, plus t_end itself."""
+    n_out = int(np.floor(t_end / output_step + 1e-9))
+    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
+    t_out[-1] = min(t_out[-1], t_end)
+    return t_out
 
 
 def run_metadata(eom: EquationsOfMotion, ps, *, integrator: str, rtol: float, atol: float, step: float | None,

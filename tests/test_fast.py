@@ -98,12 +98,15 @@ def test_on_off_switches_located_at_the_same_times():
     _agree(fast, ref, RTOL)
 
 
-@pytest.mark.parametrize("variant, friction", [("sustained_sliding", "regularized"), ("slip_then_stick", "exact")])
-def test_slider_crank_friction_trajectory_matches_reference(variant, friction):
-    fast, ref = _both(eom_or_mechanism="slider_crank", variant=variant, t_end=3.0, integrator="DOP853",
+# slip_then_stick sticks at 4.43 s: 5 s includes that located stick event (exact law)
+@pytest.mark.parametrize("variant, friction, t_end", [("sustained_sliding", "regularized", 3.0),
+                                                     ("slip_then_stick", "exact", 5.0)])
+def test_slider_crank_friction_trajectory_matches_reference(variant, friction, t_end):
+    fast, ref = _both(eom_or_mechanism="slider_crank", variant=variant, t_end=t_end, integrator="DOP853",
                       rtol=RTOL, atol=ATOL, friction=friction)
     assert fast.stats["events"] == ref.stats["events"]
-    if ref.stats["events"]:
+    if friction == "exact":
+        assert ref.stats["events"] > 0
         dt = np.abs(np.array(fast.stats["event_times"]) - np.array(ref.stats["event_times"])).max()
         assert dt <= tolerance("fast_event_time_agreement")
     _agree(fast, ref, RTOL)

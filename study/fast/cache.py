@@ -15,11 +15,13 @@ from pathlib import Path
 
 from study.model.compile import cache_dir
 
-_SOURCES = sorted(Path(__file__).resolve().parent.glob("*.py"))
+_HERE = Path(__file__).resolve().parent
+# Every module of the fast path, and the reference modules whose constants its kernels compile in.
+_SOURCES = sorted(_HERE.glob("*.py")) + [_HERE.parent / "solver" / "friction.py", _HERE.parent / "solver" / "integrate.py"]
 
 
 def source_hash() -> str:
-    """Hash of every module of the fast path (its generator and kernels)."""
+    """Hash of the sources the compiled kernels depend on (see ``_SOURCES``)."""
     h = hashlib.sha256()
     for path in _SOURCES:
         h.update(path.name.encode())

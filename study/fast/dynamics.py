@@ -24,6 +24,7 @@ from numba import njit, types
 
 from study.fast.linalg import lu_factor, lu_solve
 from study.fast.signatures import EVALUATE_T, I1, V1, f8
+from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
 
 # --- option layout ---------------------------------------------------------------------------
 STAB_NONE, STAB_BAUMGARTE, STAB_SLIDING, STAB_PROJECTION = 0, 1, 2, 3
@@ -35,8 +36,6 @@ CF_BG_DAMP, CF_BG_STIFF, CF_SM_WIDTH, CF_FRICTION_EPS, CF_PROJ_TOL, CF_HEADER = 
 
 # status codes
 OK, SINGULAR, PAINLEVE_NONE, PAINLEVE_MANY = 0, 1, 2, 3
-# as study.solver.friction.CONSISTENCY_RTOL (see its reason there)
-CONSISTENCY_RTOL = 1e-10
 
 Workspace = namedtuple("Workspace", [
     "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "K", "piv", "x",

@@ -28,7 +28,7 @@ from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
 from study.results import SimulationResult
-from study.simulate import assemble_result, run_metadata
+from study.simulate import assemble_result, output_times, run_metadata
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
 from study.solver.integrate import MAX_EVENTS, initial_mode
@@ -168,14 +168,6 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     if status != 0:
         raise RuntimeError(f"compiled acceleration solve failed at t = {t}: {_FAILURES[FAIL_RHS]}")
     return out
-
-
-def output_times(t_end: float, output_step: float) -> np.ndarray:
-    """The sampling grid of ``study.simulate.simulate``: k * output_step, plus t_end."""
-    n_out = int(np.floor(t_end / output_step + 1e-9))
-    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
-    t_out[-1] = min(t_out[-1], t_end)
-    return t_out
 
 
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step):

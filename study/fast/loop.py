@@ -25,11 +25,12 @@ from study.fast.project import project
 from study.fast.signatures import EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
+from study.solver.integrate import BRENT_RTOL, BRENT_XTOL  # as the reference loop
 
 # segment outcomes (>= 0) and failures (< 0)
 DONE, EVENT = 0, 1
 FAIL_STEP, FAIL_RHS, FAIL_PROJECTION = -1, -2, -3
-BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER = 1e-14, 4 * np.finfo(float).eps, 100  # as the reference loop
+BRENT_MAXITER = 100
 SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
 
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))

@@ -369,3 +369,46 @@ def grid_heatmaps_figure(panels: Sequence[Mapping], title: str, colorbar_label: 
             fig.colorbar(image, ax=list(axes[:len(panels)]), label=colorbar_label)
         fig.suptitle(title, fontsize=10)
     return fig
+
+
+# --- benchmark (issue 7): work-precision of the in-house solver and Exudyn --------------------------
+_BENCH_STYLES = {("in-house compiled", "DOP853"): {"color": "tab:blue", "marker": "o", "ls": "-"},
+                 ("in-house compiled", "RK45"): {"color": "tab:green", "marker": "o", "ls": "-"},
+                 ("in-house compiled", "RK4"): {"color": "tab:olive", "marker": "^", "ls": "-"},
+                 ("in-house reference", "DOP853"): {"color": "0.45", "marker": "o", "ls": ":"},
+                 ("Exudyn", "index3"): {"color": "tab:red", "marker": "s", "ls": "--"},
+                 ("Exudyn", "index2"): {"color": "tab:purple", "marker": "D", "ls": "--"}}
+
+
+def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = (1e-4, 1e-6, 1e-8)) -> Figure:
+    """Error against CPU time, one panel per mechanism, from the benchmark's ``work_precision.csv``.
+
+    Parameters
+    ----------
+    wp : DataFrame
+        Columns mechanism, variant, t_end, engine, method, setting, error, cpu_s (one row per run).
+        Runs with an error of exactly 0 or NaN are left out (log axes).
+    levels : sequence of float
+        Accuracy levels drawn as dotted horizontal lines [rad].
+    """
+    if wp.empty:
+        raise ValueError("no benchmark runs to draw")
+    panels = []
+    for mech, g in wp.groupby("mechanism", sort=False):
+        series = []
+        for (engine, method), runs in g.groupby(["engine", "method"], sort=False):
+            runs = runs[runs["error"].notna() & runs["cpu_s"].notna()].sort_values("setting", ascending=False)
+            what = "h" if engine == "Exudyn" or method == "RK4" else "rtol"
+            label = f"{engine} {method} ({what} {runs['setting'].max():.3g} … {runs['setting'].min():.3g})"
+            series.append((label, runs["cpu_s"], runs["error"],
+                           {"ms": 4, "lw": 1.2, **_BENCH_STYLES.get((engine, method), {"color": "tab:gray"})}))
+        friction = " (regularized friction, ε = 1e-3 m/s)" if mech == "slider_crank" else ""
+        panels.append({"xlabel": "CPU time of the integration [s] (this machine)",
+                       "ylabel": "max |q − q_ref| over samples and coordinates [rad]", "series": series,
+                       "title": f"{mech.replace('_', '-')}: variant {g['variant'].iloc[0]}, "
+                                f"{float(g['t_end'].iloc[0]):g} s{friction}",
+                       "legend_title": "engine, method (settings)", "legend_loc": "below",
+                       "hlines": [(lv, "accuracy levels" if k == 0 else None, {"color": "0.5", "lw": 0.8})
+                                  for k, lv in enumerate(levels)]})
+    return log_lines_figure(panels, "Work–precision: CPU time to reach an accuracy, in-house solver (compiled and "
+                            "reference paths) vs Exudyn (fixed step h)", figsize=(5.8 * len(panels), 6.4))

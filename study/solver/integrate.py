@@ -83,6 +83,8 @@ INTEGRATORS: dict[str, type[OdeSolver]] = {
 }
 # Methods whose state may be replaced between steps (projection): y plus the cached first stage f.
 PROJECTABLE = ("RK45", "DOP853", "RK23", "RK4")
+# Brent's root finder locates a switch to xtol + rtol |t| (scipy's brentq with its finest rtol).
+BRENT_XTOL, BRENT_RTOL = 1e-14, 4 * np.finfo(float).eps
 MAX_EVENTS = 100_000  # more switches than this in one run means chattering on a switching surface
 
 
@@ -206,7 +208,7 @@ def integrate(
                 flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
                 if flipped:
                     roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
-                                     xtol=1e-14, rtol=4 * np.finfo(float).eps), i) for i in flipped]
+                                     xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
                     t_e, i_e = min(roots)
                     sample(dense, t_old, t_e, False)
                     y_cur = dense(t_e)

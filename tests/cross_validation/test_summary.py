@@ -11,10 +11,11 @@ from study.pipeline import CASES_DIR, Case, find, load_case_list, run_case
 from study.reference_data import tolerance
 from study.studies import cross_validation as xv
 
-REF = (("atol", 1e-14), ("integrator", "DOP853"), ("method", "projection"), ("output_step", 0.01),
-       ("rtol", 1e-12))
-FRICTION_IN = (("friction", "regularized"), ("friction_eps", 1e-3), ("friction_sgn", "tanh"))
-FRICTION_X = (("eps", 1e-3), ("friction", "regularized"))
+REF = (("atol", tolerance("reference_atol")), ("integrator", "DOP853"), ("method", "projection"),
+       ("output_step", 0.01), ("rtol", tolerance("reference_rtol")))
+EPS = tolerance("friction_eps", table="cross_validation")
+FRICTION_IN = (("friction", "regularized"), ("friction_eps", EPS), ("friction_sgn", "tanh"))
+FRICTION_X = (("eps", EPS), ("friction", "regularized"))
 
 
 def _case(group, engine, mechanism, variant, t_end, options, labels=()):

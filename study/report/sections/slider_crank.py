@@ -17,7 +17,7 @@ from study.params import load_parameters
 from study.pipeline import Case
 from study.report import figures
 from study.report.context import ReportContext
-from study.report.render import fmt_number, md_table
+from study.report.render import fmt_int, fmt_number, md_table
 from study.studies import slider_crank as sc
 
 STUDY = "slider_crank"
@@ -49,12 +49,7 @@ def _first_time(text) -> float:
     return float(text) if text is not None else float("nan")
 
 
-def _n(x) -> str:
-    """A count (function evaluations, steps) as an integer."""
-    try:
-        return f"{int(round(float(x)))}"
-    except (TypeError, ValueError):
-        return str(x)
+
 
 
 def _treatment_cases(ctx: ReportContext, variant: str) -> dict[str, Case]:
@@ -229,7 +224,7 @@ def _treatments_text(summary: pd.DataFrame) -> list[str]:
              "|(T + V − work of the loads and friction) − its initial value|.", ""]
     cols = ["case", "treatment", "integrator", "final_phase", "n_stick", "q1_t20", "friction_t20", "normal_t20",
             "dissipated_energy", "energy_balance_error", "max_abs_phi", "nfev"]
-    rows = [[r[c] if c in ("case", "treatment", "integrator", "final_phase") else (_n(r[c]) if c in ("nfev", "n_stick") else fmt_number(r[c], 6 if c == "q1_t20" else 4))
+    rows = [[r[c] if c in ("case", "treatment", "integrator", "final_phase") else (fmt_int(r[c]) if c in ("nfev", "n_stick") else fmt_number(r[c], 6 if c == "q1_t20" else 4))
              for c in cols] for _, r in summary[summary["initial"] == "consistent"].iterrows()]
     lines += [md_table(["run", "treatment", "integrator", "phase at end", "stick onsets", "q1(20 s) [rad]",
                         "F_fr(20 s) [N]", "N(20 s) [N]", "dissipated [J]", "energy-balance error [J]",
@@ -238,7 +233,7 @@ def _treatments_text(summary: pd.DataFrame) -> list[str]:
     if ex is not None and reg is not None:
         lines.append(f"Where the exact treatment sticks, the regularized law **creeps**: in the seed case its crank "
                      f"turns from {fmt_number(ex['q1_t20'], 6)} rad (exact, stuck) to {fmt_number(reg['q1_t20'], 6)} rad at 20 s, "
-                     f"and it needs {_n(reg['nfev'])} function evaluations against {_n(ex['nfev'])} for the exact "
+                     f"and it needs {fmt_int(reg['nfev'])} function evaluations against {fmt_int(ex['nfev'])} for the exact "
                      f"run.")
     if sign is not None:
         lines.append(f"The plain sgn neither sticks nor creeps smoothly: RK4's stages straddle v = 0, so the "
@@ -269,7 +264,7 @@ def _eps_text(sweep: pd.DataFrame, timing: pd.DataFrame | None) -> list[str]:
             cpu = t["cpu_seconds"].iloc[0] if len(t) else np.nan
         rows.append([r["variant"], fmt_number(r["friction_eps"]), fmt_number(r["max_abs_dq1_vs_exact"]), fmt_number(r["creep_q1"]),
                      fmt_number(r["max_abs_dfriction_vs_exact"]), fmt_number(r["dissipated_energy"], 5),
-                     fmt_number(r["dissipated_energy_exact"], 5), _n(r["nfev"]), fmt_number(cpu, 2)])
+                     fmt_number(r["dissipated_energy_exact"], 5), fmt_int(r["nfev"]), fmt_number(cpu, 2)])
     lines += [md_table(["variant", "ε [m/s]", "max|Δq1| [rad]", "creep of q1 [rad]", "max|ΔF_fr| [N]",
                         "dissipated [J]", "dissipated, exact [J]", "evaluations", "CPU [s] (this machine)"],
                        rows, [False] + [True] * 8), ""]
@@ -281,9 +276,9 @@ def _eps_text(sweep: pd.DataFrame, timing: pd.DataFrame | None) -> list[str]:
         lines.append(f"In `slip_then_stick` the creep falls with ε (log-log slope {fmt_number(slopes.min(), 3)} to "
                      f"{fmt_number(slopes.max(), 3)} between neighbouring ε; 1 is proportional): "
                      f"{fmt_number(creep[0])} rad at ε = {fmt_number(eps[0])} m/s, {fmt_number(creep[-1])} rad at ε = {fmt_number(eps[-1])} m/s, "
-                     f"while the cost rises from {_n(sts['nfev'].iloc[0])} to {_n(sts['nfev'].iloc[-1])} function "
+                     f"while the cost rises from {fmt_int(sts['nfev'].iloc[0])} to {fmt_int(sts['nfev'].iloc[-1])} function "
                      f"evaluations (the law's stiffness grows like 1/ε). **No ε gives both stick and a cheap run: "
-                     f"the exact treatment needs {_n(sts['nfev_exact'].iloc[0])} evaluations.**")
+                     f"the exact treatment needs {fmt_int(sts['nfev_exact'].iloc[0])} evaluations.**")
     ss = sweep[sweep["variant"] == "sustained_sliding"].sort_values("friction_eps", ascending=False)
     if len(ss):
         lines.append(f"In `sustained_sliding`, which never sticks, max|Δq1| goes from "

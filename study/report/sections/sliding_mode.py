@@ -16,7 +16,7 @@ import pandas as pd
 
 from study.report import figures
 from study.report.context import ReportContext
-from study.report.render import frame_table, md_table
+from study.report.render import fmt_number, frame_table, md_table
 from study.results import SimulationResult, package_versions
 from study.studies import sliding_mode as sm
 
@@ -88,8 +88,7 @@ def _ordered(frame: pd.DataFrame, settings: list[str], methods: list[str] | None
     return frame.iloc[order].reset_index(drop=True)
 
 
-def _fmt(x: float) -> str:
-    return f"{x:.3g}"
+
 
 
 def _slug(setting: str) -> str:
@@ -185,16 +184,16 @@ def _key_finding(runs: SlidingModeRuns, table: SavedTable) -> list[str]:
     lines += [md_table(["integrator_setting", "ω = Λ = K [1/s]", "Baumgarte max|Φ|", "sliding-mode runs",
                         "sliding-mode max|Φ| (min)", "(max)", "ratio min", "ratio max"],
                        [[r["setting"], f"{r['omega']:g}", r["bg_text"], str(r["n"]), r["lo_text"], r["hi_text"],
-                         _fmt(r["ratio_lo"]), _fmt(r["ratio_hi"])] for r in rows],
+                         fmt_number(r["ratio_lo"]), fmt_number(r["ratio_hi"])] for r in rows],
                        [False, True, True, True, True, True, True, True]), ""]
     lo = min(r["ratio_lo"] for r in rows)
     hi = max(r["ratio_hi"] for r in rows)
     method_factor = max(hi, 1.0 / lo)
-    lines.append(f"Over all {len(rows)} pairs the ratio lies between **{_fmt(lo)}** and **{_fmt(hi)}**: "
+    lines.append(f"Over all {len(rows)} pairs the ratio lies between **{fmt_number(lo)}** and **{fmt_number(hi)}**: "
                  + (f"at a given setting and equal gains the two methods reach the same constraint error to "
-                    f"within a factor of {_fmt(method_factor)} (the study's 'about' means within a factor of "
+                    f"within a factor of {fmt_number(method_factor)} (the study's 'about' means within a factor of "
                     f"{sm.DECADE:g})." if method_factor <= sm.DECADE else
-                    f"at equal gains the two methods differ by up to a factor of {_fmt(method_factor)}, more "
+                    f"at equal gains the two methods differ by up to a factor of {fmt_number(method_factor)}, more "
                     f"than the study's 'about' (a factor of {sm.DECADE:g})."))
     setting_factor = 1.0
     for w in sorted({r["omega"] for r in rows}):
@@ -206,7 +205,7 @@ def _key_finding(runs: SlidingModeRuns, table: SavedTable) -> list[str]:
         setting_factor = max(setting_factor, values[i_hi] / values[i_lo])
         lines[-1] += (f" With ω = {w:g}, Baumgarte's max|Φ| ranges over the settings from {group[i_lo]['bg_text']} "
                       f"({group[i_lo]['setting']}) to {group[i_hi]['bg_text']} ({group[i_hi]['setting']}), a factor "
-                      f"of {_fmt(values[i_hi] / values[i_lo])}.")
+                      f"of {fmt_number(values[i_hi] / values[i_lo])}.")
     if setting_factor > sm.DECADE * method_factor:
         lines[-1] += (" The level is set by the integrator and its tolerance (and by the gains) far more than by "
                       "the choice between the two methods.")
@@ -227,7 +226,7 @@ def _equivalence_paragraph(rows: list[dict]) -> list[str]:
     shown = ", ".join(f"{k} = {' or '.join(v)}" for k, v in gains.items())
     levels = sm.CLAIMED_LEVEL
     return [text, "", f"Switching term of the paired sliding-mode runs (from their metadata): {shown}.", "",
-            f"A {_fmt(levels['baumgarte'] / levels['sliding_mode'])}-fold advantage of sliding mode over "
+            f"A {fmt_number(levels['baumgarte'] / levels['sliding_mode'])}-fold advantage of sliding mode over "
             f"Baumgarte (the claimed {levels['sliding_mode']:g} against {levels['baumgarte']:g}) therefore "
             "cannot come from the method at equal gains.", ""]
 
