@@ -4,6 +4,10 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SLOW_PASSED := .cache/slow-tests.passed
+# sympy's simplification (errata table, derivation) takes paths that depend on Python's hash order;
+# a fixed seed makes its run time and output the same on every run (one random seed once took
+# minutes instead of seconds in the errata check).
+export PYTHONHASHSEED := 0
 SOURCES := $(shell find study tests reference -type f -not -name '*.pyc') pyproject.toml
 
 .PHONY: test reproduce run errata initial report bench clean-cache
