@@ -162,7 +162,10 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     """SIGINT after the first saved result; the rerun reuses everything saved and completes."""
     env = {**os.environ, "STUDY_CACHE_DIR": str(tmp_path / "cache")}
     cmd = [sys.executable, "-m", "study", "run", "--workers", "1", "--cases", str(tiny), "--out", str(tmp_path / "r")]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # A shell's background job ignores SIGINT and its children inherit that; restore the default so
+    # Python installs its KeyboardInterrupt handler in the child, as in an interactive Ctrl-C.
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     runs = tmp_path / "cache" / "runs"
     deadline = time.monotonic() + 120
     while not list(runs.glob("*.json")) and time.monotonic() < deadline and proc.poll() is None:
