@@ -126,21 +126,12 @@ def simulate(
                                  progress=progress, friction=friction, friction_eps=friction_eps,
                                  friction_sgn=friction_sgn, **method_options)
 
-    stabilization = make_stabilization(method, **method_options)
-    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
-    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
+    dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
+                                        friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
+                                        **method_options)
+    stabilization, law = dyn.stabilization, getattr(dyn, "law", None)
     m = eom.n_coordinates
-    if law is None:
-        dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
-        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
-    else:
-        n_load = len(np.atleast_1d(eom.indicators(0.0, q0, qd0))) if eom.indicators is not None else 0
-        dyn = FrictionDynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names,
-                               law=law, n_load_modes=n_load)
-        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
-
     indicators = None
-    switching = StickSlipSwitching(dyn) if law is not None and law.switched else None
     if eom.indicators is not None and switching is None:
         def indicators(t, y):
             return eom.indicators(t, y[:m], y[m:2 * m])
@@ -176,6 +167,26 @@ def simulate(
                                     acceleration_solver=acceleration_solver, output_step=output_step,
                                     t_end=t_end, stabilization=stabilization, law=law))
     return result
+
+
+def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, method: str,
+                   acceleration_solver: str, friction: str | None, friction_eps: float, friction_sgn: str,
+                   **method_options) -> tuple[Dynamics, np.ndarray, StickSlipSwitching | None]:
+    """A run's dynamics (with friction: a FrictionDynamics), its initial state y0 and its stick/slip rule.
+
+    y0 = [q0, qd0, 0 for the work of every applied load (and of every contact's friction)].
+    """
+    stabilization = make_stabilization(method, **method_options)
+    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
+    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
+    solver = make_acceleration_solver(acceleration_solver)
+    if law is None:
+        dyn = Dynamics(eom, solver, stabilization, work_names)
+        return dyn, np.concatenate([q0, qd0, np.zeros(len(work_names))]), None
+    n_load = len(np.atleast_1d(eom.indicators(0.0, q0, qd0))) if eom.indicators is not None else 0
+    dyn = FrictionDynamics(eom, solver, stabilization, work_names, law=law, n_load_modes=n_load)
+    y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
+    return dyn, y0, StickSlipSwitching(dyn) if law.switched else None
 
 
 def output_times(t_end: float, output_step: float) -> np.ndarray:

@@ -28,11 +28,11 @@ from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
 from study.results import SimulationResult
-from study.simulate import assemble_result, output_times, run_metadata
+from study.simulate import assemble_result, build_dynamics, output_times, run_metadata
 from study.solver.dynamics import Dynamics
-from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
+from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
-from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization, make_stabilization
+from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
 SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
@@ -135,26 +135,20 @@ class Setup:
 
 def setup(eom: EquationsOfMotion, ps: ParameterSet, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
-    """Build the reference dynamics (as ``study.simulate.simulate``) and the compiled option arrays."""
-    from study.solver.accelerations import make_acceleration_solver
-
+    """Build the reference dynamics (``study.simulate.build_dynamics``) and the compiled option arrays."""
     model = compiled_model(ps)
-    stabilization = make_stabilization(method, **method_options)
-    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
-    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
+    dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
+                                        friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
+                                        **method_options)
     n_load = model.n_load_indicators
-    if work_names != model.work_names:
-        raise ValueError(f"backend='compiled': the loads {work_names} of the equations differ from the compiled "
+    if dyn.work_names != model.work_names:
+        raise ValueError(f"backend='compiled': the loads {dyn.work_names} of the equations differ from the compiled "
                          f"description's {model.work_names}; the equations must come from the parameter set")
-    if law is None:
-        dyn = Dynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names)
-        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names))])
-    else:
-        dyn = FrictionDynamics(eom, make_acceleration_solver(acceleration_solver), stabilization, work_names,
-                               law=law, n_load_modes=n_load)
-        y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
-    ci, cf = pack_options(eom, stabilization, law, len(work_names), n_load)
-    switching = StickSlipSwitching(dyn) if law is not None and law.switched else None
+    law = getattr(dyn, "law", None)
+    if law is not None and dyn.n_load_modes != n_load:
+        raise ValueError(f"backend='compiled': {dyn.n_load_modes} load switching functions in the equations, "
+                         f"{n_load} in the compiled description")
+    ci, cf = pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load)
     return Setup(model, dyn, ci, cf, y0, switching, n_load)
 
 
