@@ -48,6 +48,7 @@ from exudyn.itemInterface import (
     SensorObject,
 )
 
+from study import mechanisms
 from study.results import SimulationResult, package_versions
 
 OVT = exu.OutputVariableType
@@ -308,21 +309,9 @@ class Model:
 
     def assemble(self) -> None:
         if self.pre_step:
-            calls = tuple(self.pre_step)
-
-            def pre(mbs, t):
-                for f in calls:
-                    f(mbs, t)
-                return True
-            self.mbs.SetPreStepUserFunction(pre)
+            self.mbs.SetPreStepUserFunction(_chained(self.pre_step))
         if self.post_step:
-            calls_post = tuple(self.post_step)
-
-            def post(mbs, t):
-                for f in calls_post:
-                    f(mbs, t)
-                return True
-            self.mbs.SetPostStepUserFunction(post)
+            self.mbs.SetPostStepUserFunction(_chained(self.post_step))
         self.mbs.Assemble()
 
     # --- stored sensor data -----------------------------------------------------------------
@@ -346,6 +335,17 @@ class Model:
 # --------------------------------------------------------------------------------------------
 # the guarded reaction reading and the regularized guide friction
 # --------------------------------------------------------------------------------------------
+def _chained(calls) -> Callable:
+    """One pre/post-step user function calling every function of ``calls`` in order."""
+    calls = tuple(calls)
+
+    def run(mbs, t):
+        for f in calls:
+            f(mbs, t)
+        return True
+    return run
+
+
 class ReactionGuard:
     """'Hybrid' reading of a joint reaction inside a load user function.
 
@@ -460,6 +460,38 @@ def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictio
 
 
 # --------------------------------------------------------------------------------------------
+# running a mechanism module
+# --------------------------------------------------------------------------------------------
+# A mechanism module provides MECHANISM, build(ps, q0, qd0, friction, eps) -> (Model, loads with
+# 'friction'), loads_jacobian(ps, friction), initial_values(model) -> (qdd, lam) and
+# result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult.
+def run_model(mech, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
+              eps: float) -> SimulationResult:
+    """Build ``mech``'s model at the in-house consistent initial state, solve it, return its result."""
+    grid = check_arguments(t_end, h, solver, output_step, friction, eps)
+    if ps.mechanism != mech.MECHANISM:
+        raise ValueError(f"parameter set is for {ps.mechanism!r}, not {mech.MECHANISM!r}")
+    eom = mechanisms.module(mech.MECHANISM).equations(ps)
+    state0 = mechanisms.initial_state(ps, eom)
+    model, loads = mech.build(ps, state0.q, state0.qd, friction, eps)
+    settings = simulation_settings(grid, solver, mech.loads_jacobian(ps, friction))
+    stats = {}
+    if solver in IMPLICIT_SOLVERS:
+        stats.update(seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else []))
+    stats.update(solve(model, settings, solver))
+    return mech.result(ps, eom, model, loads, grid, solver, friction, eps, stats)
+
+
+def initial_accelerations(mech, ps, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
+    """``mech``'s accelerations and multipliers at a state, from Exudyn's solver initialization alone."""
+    check_arguments(1.0, 1.0, "index3", None, friction, eps)
+    model, loads = mech.build(ps, q, qd, friction, eps)
+    settings = simulation_settings(RunGrid(1.0, 1.0, 1, 1), "index3", mech.loads_jacobian(ps, friction))
+    seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else [])
+    return initialize(model, settings, lambda: mech.initial_values(model))
+
+
+# --------------------------------------------------------------------------------------------
 # solving and post-processing
 # --------------------------------------------------------------------------------------------
 def solve(model: Model, settings: exu.SimulationSettings, solver: str) -> dict:
@@ -489,6 +521,24 @@ def solve(model: Model, settings: exu.SimulationSettings, solver: str) -> dict:
         "newton_iterations": int(slv.it.newtonStepsCount),
         "jacobian_evaluations": int(slv.it.newtonJacobiCount),
     }
+
+
+def friction_history(fric: GuideFriction, grid: RunGrid, stats: dict) -> Array:
+    """The friction user function's record at every step (checked), its call counts added to ``stats``."""
+    hist = np.asarray(fric.history, dtype=float)
+    if hist.shape != (grid.n_steps + 1, 4):
+        raise RuntimeError(f"friction history has {hist.shape[0]} rows, expected {grid.n_steps + 1}")
+    stats.update(friction_user_function_calls=fric.guard.calls, friction_guard_substitutions=fric.guard.substitutions)
+    return hist
+
+
+def joint_forces(model: Model, grid: RunGrid, joints) -> dict[str, Array]:
+    """``joint_<J>_x/_y``: global force of each revolute joint J on its distal body, at every step."""
+    out = {}
+    for joint in joints:
+        f = -model.series((joint, "force"), grid)
+        out[f"joint_{joint}_x"], out[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
+    return out
 
 
 def cumulative_trapezoid(y: Array, t: Array) -> Array:

@@ -35,9 +35,9 @@ Mapping to the in-house result (``study.mechanisms.quick_return``), M qdd + Phi_
 
 from __future__ import annotations
 
+import sys
 import numpy as np
 
-from study import mechanisms
 from study.exudyn_models import common
 from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard, unit, unit_normal
 from study.mechanisms.quick_return import cutting_law
@@ -158,21 +158,10 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
     SimulationResult
         See the module docstring for the mapping of every quantity.
     """
-    grid = common.check_arguments(t_end, h, solver, output_step, friction, eps)
-    if ps.mechanism != MECHANISM:
-        raise ValueError(f"parameter set is for {ps.mechanism!r}, not {MECHANISM!r}")
-    eom = mechanisms.module(MECHANISM).equations(ps)
-    state0 = mechanisms.initial_state(ps, eom)
-    model, loads = build(ps, state0.q, state0.qd, friction, eps)
-    settings = common.simulation_settings(grid, solver, loads_jacobian(ps, friction))
-    stats = {}
-    if solver in common.IMPLICIT_SOLVERS:
-        stats.update(common.seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else []))
-    stats.update(common.solve(model, settings, solver))
-    return _result(ps, eom, model, loads, grid, solver, friction, eps, stats)
+    return common.run_model(sys.modules[__name__], ps, t_end, h, solver, output_step, friction, eps)
 
 
-def _initial_values(model) -> tuple[np.ndarray, np.ndarray]:
+def initial_values(model) -> tuple[np.ndarray, np.ndarray]:
     qdd = np.array([model.node_output(b, OVT.Coordinates_tt)[2] for b in ("crank", "rocker", "rod")])
     return qdd, np.array([model.joint_output("block_on_rocker")[1], -model.joint_output("ram_guide")[1]])
 
@@ -190,14 +179,10 @@ def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized"
     qdd : (m,) array
     lam : (r,) array
     """
-    common.check_arguments(1.0, 1.0, "index3", None, friction, eps)
-    model, loads = build(ps, q, qd, friction, eps)
-    settings = common.simulation_settings(common.RunGrid(1.0, 1.0, 1, 1), "index3", loads_jacobian(ps, friction))
-    common.seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else [])
-    return common.initialize(model, settings, lambda: _initial_values(model))
+    return common.initial_accelerations(sys.modules[__name__], ps, q, qd, friction, eps)
 
 
-def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult:
+def result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult:
     v = ps.values
     t = grid.h * np.arange(grid.n_steps + 1)
     pos, vel, acc = {}, {}, {}
@@ -217,16 +202,10 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
     works = {"drive": v.M * vel["crank"][:, 2], "cutting": cut * vel["ram"][:, 0]}
     fric = loads["friction"]
     if fric is not None:
-        hist = np.asarray(fric.history, dtype=float)
-        if hist.shape != (grid.n_steps + 1, 4):
-            raise RuntimeError(f"friction history has {hist.shape[0]} rows, expected {grid.n_steps + 1}")
+        hist = common.friction_history(fric, grid, stats)
         forces["friction_ram_guide"] = hist[:, 2]
         works["friction_ram_guide"] = hist[:, 2] * vel["ram"][:, 0]
-        stats.update(friction_user_function_calls=fric.guard.calls,
-                     friction_guard_substitutions=fric.guard.substitutions)
-    for joint in REVOLUTE_JOINTS:
-        f = -model.series((joint, "force"), grid)
-        forces[f"joint_{joint}_x"], forces[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
+    forces.update(common.joint_forces(model, grid, REVOLUTE_JOINTS))
 
     masses = {"crank": (v.m1, v.J1), "rocker": (v.m2, v.J2), "rod": (v.m3, v.J3), "block": (v.m4, v.J4),
               "ram": (v.m5, v.J5)}

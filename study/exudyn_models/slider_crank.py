@@ -35,9 +35,9 @@ Mapping to the in-house result (``study.mechanisms.slider_crank``):
 
 from __future__ import annotations
 
+import sys
 import numpy as np
 
-from study import mechanisms
 from study.exudyn_models import common
 from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard, unit, unit_normal
 from study.params import ParameterSet
@@ -113,6 +113,13 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
     return model, {"friction": fric}
 
 
+def loads_jacobian(ps: ParameterSet, friction: str) -> int:
+    """2, always: the regularized friction and resistance tanh(v/eps) need their derivative in the Newton
+    matrix (without it Newton diverges, see common.simulation_settings); the frictionless runs keep the
+    same setting, so the two differ only by the friction itself."""
+    return 2
+
+
 def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
         friction: str = "regularized", eps: float = common.DEFAULT_EPS) -> SimulationResult:
     """Simulate the slider-crank in Exudyn from the in-house consistent initial state.
@@ -139,21 +146,10 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
     SimulationResult
         See the module docstring for the mapping of every quantity.
     """
-    grid = common.check_arguments(t_end, h, solver, output_step, friction, eps)
-    if ps.mechanism != MECHANISM:
-        raise ValueError(f"parameter set is for {ps.mechanism!r}, not {MECHANISM!r}")
-    eom = mechanisms.module(MECHANISM).equations(ps)
-    state0 = mechanisms.initial_state(ps, eom)
-    model, loads = build(ps, state0.q, state0.qd, friction, eps)
-    settings = common.simulation_settings(grid, solver, loads_jacobian=2)
-    stats = {}
-    if solver in common.IMPLICIT_SOLVERS:
-        stats.update(common.seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else []))
-    stats.update(common.solve(model, settings, solver))
-    return _result(ps, eom, model, loads, grid, solver, friction, eps, stats)
+    return common.run_model(sys.modules[__name__], ps, t_end, h, solver, output_step, friction, eps)
 
 
-def _initial_values(model) -> tuple[np.ndarray, np.ndarray]:
+def initial_values(model) -> tuple[np.ndarray, np.ndarray]:
     acc = {b: model.node_output(b, OVT.Coordinates_tt)[2] for b in ("crank", "rod")}
     qdd = np.array([acc["crank"], acc["rod"] - acc["crank"]])
     return qdd, np.array([model.joint_output("guide")[1]])
@@ -172,14 +168,10 @@ def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized"
     qdd : (m,) array
     lam : (r,) array
     """
-    common.check_arguments(1.0, 1.0, "index3", None, friction, eps)
-    model, loads = build(ps, q, qd, friction, eps)
-    settings = common.simulation_settings(common.RunGrid(1.0, 1.0, 1, 1), "index3", loads_jacobian=2)
-    common.seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else [])
-    return common.initialize(model, settings, lambda: _initial_values(model))
+    return common.initial_accelerations(sys.modules[__name__], ps, q, qd, friction, eps)
 
 
-def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult:
+def result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult:
     v = ps.values
     t = grid.h * np.arange(grid.n_steps + 1)
     pos, vel, acc = {}, {}, {}
@@ -194,19 +186,13 @@ def _result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> Simula
     forces = {"normal_guide": -lam[:, 0]}
     fric = loads["friction"]
     if fric is not None:
-        hist = np.asarray(fric.history, dtype=float)
-        if hist.shape != (grid.n_steps + 1, 4):
-            raise RuntimeError(f"friction history has {hist.shape[0]} rows, expected {grid.n_steps + 1}")
+        hist = common.friction_history(fric, grid, stats)
         coulomb, resistance = hist[:, 2], hist[:, 3]
-        stats.update(friction_user_function_calls=fric.guard.calls,
-                     friction_guard_substitutions=fric.guard.substitutions)
     else:
         coulomb = resistance = np.zeros_like(t)
     forces["friction_guide"] = coulomb
     forces["resistance_guide"] = resistance
-    for joint in REVOLUTE_JOINTS:
-        f = -model.series((joint, "force"), grid)
-        forces[f"joint_{joint}_x"], forces[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
+    forces.update(common.joint_forces(model, grid, REVOLUTE_JOINTS))
 
     bodies = {"crank": (v.m1, v.J1), "rod": (v.m2, v.J2), "slider": (v.m3, v.J3)}
     kinetic, potential = common.body_energies(bodies, pos, vel, v.g)
