@@ -13,6 +13,7 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     variant = "seed"
     t_end = 20.0
     options = { integrator = "DOP853", rtol = 1e-12, method = "projection" }
+    # a value "@key" (or "@table:key") is the entry of reference/tolerances.toml (or <table>.toml)
     # optional: the cartesian product of these lists; a list entry that is a table is merged into
     # the options (its 'label' names it), a scalar sets the option of that name. The keys 'variant',
     # 'mechanism' and 't_end' set those fields instead of an option.
@@ -53,6 +54,7 @@ from typing import Any, Iterable, Iterator, Mapping
 import pandas as pd
 
 from study.params import REFERENCE_DIR, load_parameters
+from study.reference_data import tolerance
 from study.results import SimulationResult, atomic_write, package_versions
 
 CASES_DIR = REFERENCE_DIR / "cases"
@@ -189,6 +191,18 @@ def _label(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
+def _resolve(value: Any, where: str) -> Any:
+    """A case-list value; the string '@key' (or '@table:key') stands for that entry of
+    reference/tolerances.toml (or reference/<table>.toml), so a number kept there is not typed again."""
+    if not (isinstance(value, str) and value.startswith("@")):
+        return value
+    table, _, key = value[1:].rpartition(":")
+    try:
+        return tolerance(key, table=table or "tolerances")
+    except (KeyError, FileNotFoundError) as exc:
+        raise CaseListError(f"{where}: {value!r} names no reference entry ({exc})") from None
+
+
 def _excluded(rule: Mapping, fields: Mapping, options: Mapping, where: str) -> bool:
     """True if every entry of an exclude rule equals the case's field or option of that name."""
     values = {**options, **fields}
@@ -216,7 +230,8 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
     unknown = set(g) - _GROUP_KEYS
     if unknown:
         raise CaseListError(f"{where}: unknown keys {sorted(unknown)}; valid: {sorted(_GROUP_KEYS)}")
-    fields = {"mechanism": g.get("mechanism"), "variant": g.get("variant", "seed"), "t_end": g.get("t_end")}
+    fields = {"mechanism": g.get("mechanism"), "variant": g.get("variant", "seed"),
+              "t_end": _resolve(g.get("t_end"), where)}
     engine = g.get("engine", "inhouse")
     if engine not in ENGINES:
         raise CaseListError(f"{where}: engine = {engine!r} is not one of {ENGINES}")
@@ -227,14 +242,14 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
     _check_exclude(g, where)
     cases = []
     for combo in itertools.product(*sweep.values()) if sweep else [()]:
-        case_fields, options, labels = dict(fields), dict(g.get("options", {})), []
+        case_fields, options, labels = dict(fields), {k: _resolve(v, where) for k, v in g.get("options", {}).items()}, []
         for k, v in zip(sweep, combo):
             if isinstance(v, Mapping):
-                options.update({kk: vv for kk, vv in v.items() if kk != "label"})
+                options.update({kk: _resolve(vv, where) for kk, vv in v.items() if kk != "label"})
             elif k in _FIELD_SWEEPS:
-                case_fields[k] = v
+                case_fields[k] = _resolve(v, where)
             else:
-                options[k] = v
+                options[k] = _resolve(v, where)
             labels.append((k, _label(v)))
         if any(_excluded(rule, case_fields, options, where) for rule in g.get("exclude", [])):
             continue

@@ -246,3 +246,26 @@ def test_result_from_other_code_is_refused(tiny, tmp_path, monkeypatch):
     out = pl.run_cases(cases, store, pl.InlineExecutor())
     assert out.computed == 0 and "code version 0000000000000000" in out.failed[cases[0].name]
     assert not store.has(cases[0])
+
+
+def test_at_references_read_the_reference_tables(tmp_path):
+    """'@key' and '@table:key' stand for reference entries, in options, sweeps and t_end; unknown ones are named."""
+    path = _write(tmp_path, """
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "quick_return"
+t_end = "@cross_validation:order_horizon"
+options = { rtol = "@reference_rtol" }
+sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:friction_eps" }] }
+""")
+    from study.reference_data import tolerance
+
+    (case,) = pl.load_case_list(path).cases
+    assert case.t_end == tolerance("order_horizon", table="cross_validation")
+    assert case.kwargs == {"rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol"),
+                           "eps": tolerance("friction_eps", table="cross_validation")}
+    _write(tmp_path, path.read_text().replace("@reference_rtol", "@no_such_entry"))
+    with pytest.raises(pl.CaseListError, match="'@no_such_entry' names no reference entry"):
+        pl.load_case_list(path)
