@@ -136,13 +136,13 @@ def build_parser() -> argparse.ArgumentParser:
             p.set_defaults(studies=None)
         p.set_defaults(func=func)
 
-    from study.mechanisms import MECHANISMS
+    from study.params import available_mechanisms
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import STABILIZATIONS
 
     p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
-    p.add_argument("mechanism", choices=list(MECHANISMS))
+    p.add_argument("mechanism", choices=list(available_mechanisms()))
     p.add_argument("--case", default="seed", help="parameter-set variant (default: seed)")
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
     p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))

@@ -43,6 +43,7 @@ import numpy as np
 import pandas as pd
 import sympy as sp
 
+from study import mechanisms
 from study.mechanisms import quick_return, slider_crank
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
@@ -171,7 +172,7 @@ class _Context:
     def __init__(self, spec: PaperSpec):
         self.spec = spec
         self.ps: ParameterSet = load_parameters(spec.mechanism, "seed")
-        self.b: MechanismBuilder = spec.module.describe(self.ps)
+        self.b: MechanismBuilder = mechanisms.builder(self.ps)
         self.eqs: SymbolicEquations = derive(self.b)
         b = self.b
         self.q, self.qd = b.q, b.qd
@@ -183,11 +184,9 @@ class _Context:
             k = c[1:]
             self.names[f"q{k}"], self.names[f"qd{k}"], self.names[f"qdd{k}"] = b.q[i], b.qd[i], self.qdd[i]
         self.parameters = {k: getattr(b.p, k) for k in b.values}
-        clash = set(spec.extras) & set(self.parameters)
-        if clash:
-            raise ValueError(f"paper {spec.paper}: extra symbols {sorted(clash)} clash with parameters")
         self.names.update(self.parameters)
-        self.extras = {k: sp.Symbol(f"x_{k}", real=True) for k in spec.extras}
+        # a printed load magnitude that is also a parameter (the drive torque M) is that parameter
+        self.extras = {k: sp.Symbol(f"x_{k}", real=True) for k in spec.extras if k not in self.parameters}
         self.names.update(self.extras)
         self.display = {sym: sp.Symbol(name) for name, sym in self.names.items()}
         self._targets: dict[str, sp.Matrix] = {}
@@ -290,9 +289,9 @@ class _Context:
         raise KeyError(f"paper {self.spec.paper}: unknown target {name!r}")
 
     def _location(self, name: str) -> tuple[sp.Matrix, sp.Matrix]:
-        for pt in self.b.points:
-            if pt.name == name:
-                return self.eqs.point_positions[name], self.eqs.point_jacobians[name]
+        for pt in self.b.points:  # a printed point name is the first body point of that name
+            if pt.name == name or pt.name.endswith(f".{name}"):
+                return self.eqs.point_positions[pt.name], self.eqs.point_jacobians[pt.name]
         for body in self.b.bodies:
             if body.name == name:
                 r = sp.Matrix([body.x, body.y])
@@ -646,7 +645,7 @@ def _judge_initial(ctx: _Context, entry: Mapping[str, Any]) -> _Judgement:
         if abs(ours[k] - printed[k]) > tol * (1 + 1e-9):
             bad.append(f"[{k + 1}] printed {text}, reproduced {ours[k]:.6g}")
     name = "qd(0)" if rates else "q(0)"
-    branch = "satisfies" if ctx.spec.module.on_branch(ctx.ps, state.q) else "VIOLATES"
+    branch = "satisfies" if mechanisms.on_branch(ctx.ps, state.q) else "VIOLATES"
     if rates:
         residual = f"|Phi_q qd| of the printed qd(0) at the consistent q(0): {np.max(np.abs(kin.phi_q(state.q) @ printed)):.3g}"
     else:

@@ -7,14 +7,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from study.mechanisms import MECHANISMS, initial_state, load
+from study.mechanisms import initial_state, load
+from study.params import available_mechanisms
 from study.solver.initial import constraint_residuals
 
 
 def initial_conditions_table() -> pd.DataFrame:
     """One row per mechanism and coordinate: printed q, qd; consistent q, qd; residuals."""
     rows = []
-    for name in MECHANISMS:
+    for name in available_mechanisms():
         ps, eom = load(name, "seed")
         state = initial_state(ps, eom)
         phi_p, vel_p = constraint_residuals(eom, ps.initial.printed_q, ps.initial.printed_qd)

@@ -1,8 +1,11 @@
 """Parameter sets: load ``reference/<mechanism>.toml`` into frozen dataclasses.
 
-Every physics parameter is required. A parameter file entry is a table with exactly
-``value``, ``unit`` and ``source`` (provenance: paper file, section, equation or table).
-Variants override named values of the ``seed`` set; nothing is ever filled in by default.
+A mechanism is known by its parameter file ``reference/<mechanism>.toml`` (``[meta] mechanism``
+equal to the file name); the file is its own schema. A parameter entry is a table with ``value``,
+``unit``, ``source`` (provenance: paper file, section, equation or table), ``doc`` (meaning) and its
+validation: ``rule`` (positive, nonnegative, finite) for numbers or ``choices`` for strings.
+Variants override named values of the ``seed`` set; nothing is ever filled in by default, and a
+parameter the mechanism's description needs but the file lacks is an error there.
 
 Errors are collected and raised together as one :class:`ParameterError` whose message names
 the file, the key, the offending value and the rule it breaks.
@@ -40,78 +43,34 @@ def _check_number(value: Any, rule: str) -> str | None:
     return None
 
 
-def physical(rule: str, doc: str) -> Any:
-    """Declare a required numeric field with its validation rule and unit/meaning."""
-    return field(metadata={"rule": rule, "doc": doc})
-
-
-def choice(options: tuple[str, ...], doc: str) -> Any:
-    """Declare a required string field restricted to ``options``."""
-    return field(metadata={"choices": options, "doc": doc})
+RULES = (POSITIVE, NONNEGATIVE, FINITE)
+#: Keys of one parameter entry: value, unit, source (provenance), doc (meaning), and exactly one of
+#: rule (a numeric parameter, one of RULES) or choices (a string parameter, the allowed values).
+ENTRY_KEYS = {"value", "unit", "source", "doc", "rule", "choices"}
 
 
 class ParameterError(ValueError):
     """A parameter file is malformed; the message lists every problem found."""
 
 
-@dataclass(frozen=True)
-class SliderCrankParameters:
-    """Mechanism A, paper 000 sec. 3. Units SI; see ``reference/slider_crank.toml`` for provenance."""
+def required_parameters(mechanism: str) -> tuple[str, ...]:
+    """The parameters a mechanism's description reads: ``study.mechanisms.<mechanism>.PARAMETERS``.
 
-    J1: float = physical(POSITIVE, "crank inertia about the pivot O [kg m^2]")
-    m1: float = physical(POSITIVE, "crank mass [kg] (COM at O)")
-    J2: float = physical(POSITIVE, "rod centroidal inertia [kg m^2]")
-    m2: float = physical(POSITIVE, "rod mass [kg]")
-    m3: float = physical(POSITIVE, "slider mass [kg]")
-    J3: float = physical(POSITIVE, "slider inertia [kg m^2] (rotation locked)")
-    l1: float = physical(POSITIVE, "crank length OA [m]")
-    l2: float = physical(POSITIVE, "rod length AB [m]")
-    c2: float = physical(POSITIVE, "distance A to rod COM C2 [m]")
-    g: float = physical(POSITIVE, "gravity [m/s^2], acting along -y")
-    mu: float = physical(NONNEGATIVE, "Coulomb coefficient in the slider guide [-]")
-    F: float = physical(NONNEGATIVE, "resistance on the slider opposing its motion [N]")
-    M: float = physical(FINITE, "drive torque on the crank [N m]")
-    alpha: float = physical(NONNEGATIVE, "coefficient of the -alpha*q1 (or -alpha*q1dot) crank term")
-    alpha_law: str = choice(("spring", "damping"), "reading of '-alpha q1': torsion spring or viscous damper")
+    The description module is found by name only (no mechanism is known here), and imported when
+    a parameter file is checked, after this module is loaded.
+    """
+    import importlib
+    import importlib.util
+
+    if importlib.util.find_spec(f"study.mechanisms.{mechanism}") is None:
+        return ()
+    return tuple(getattr(importlib.import_module(f"study.mechanisms.{mechanism}"), "PARAMETERS", ()))
 
 
-@dataclass(frozen=True)
-class QuickReturnParameters:
-    """Mechanism B, paper 001 sec. 4, Table 1. Units SI; see ``reference/quick_return.toml``."""
-
-    l1: float = physical(POSITIVE, "crank length OA [m]")
-    l2: float = physical(POSITIVE, "rocker length to its tip E [m]")
-    l3: float = physical(POSITIVE, "connecting rod length ED [m]")
-    m1: float = physical(POSITIVE, "crank mass [kg]")
-    m2: float = physical(POSITIVE, "rocker mass [kg]")
-    m3: float = physical(POSITIVE, "rod mass [kg]")
-    m4: float = physical(POSITIVE, "sliding block mass [kg]")
-    m5: float = physical(POSITIVE, "ram mass [kg]")
-    a1: float = physical(NONNEGATIVE, "crank COM distance from O [m]")
-    a2: float = physical(POSITIVE, "rocker COM distance from its pivot [m]")
-    a3: float = physical(POSITIVE, "rod COM distance from E [m]")
-    J1: float = physical(POSITIVE, "crank centroidal inertia [kg m^2]")
-    J2: float = physical(POSITIVE, "rocker centroidal inertia [kg m^2]")
-    J3: float = physical(POSITIVE, "rod centroidal inertia [kg m^2]")
-    J4: float = physical(POSITIVE, "block centroidal inertia [kg m^2]")
-    J5: float = physical(POSITIVE, "ram inertia [kg m^2] (rotation locked)")
-    h1: float = physical(POSITIVE, "height of the crank pivot above the rocker pivot [m]")
-    h2: float = physical(POSITIVE, "height of the ram guide [m]")
-    g: float = physical(POSITIVE, "gravity [m/s^2], acting along -y")
-    M: float = physical(FINITE, "drive torque on the crank [N m]")
-    F_cut: float = physical(NONNEGATIVE, "cutting force magnitude [N]")
-    x_cut_min: float = physical(FINITE, "left end of the cutting window for x_D [m]")
-    x_cut_max: float = physical(FINITE, "right end of the cutting window for x_D [m]")
-    cutting_law: str = choice(("on_off", "smooth"), "cutting-force law")
-    v_ramp: float = physical(POSITIVE, "tanh ramp width in v_D, smooth law [m/s]")
-    x_ramp: float = physical(POSITIVE, "tanh ramp width at the window edges, smooth law [m]")
-    mu_guide: float = physical(NONNEGATIVE, "Coulomb coefficient at the ram guide [-]")
-
-
-PARAMETER_CLASSES = {
-    "slider_crank": SliderCrankParameters,
-    "quick_return": QuickReturnParameters,
-}
+def _values_class(mechanism: str, names: list[str]) -> type:
+    """A frozen dataclass holding one mechanism's parameter values (``ps.values.<name>``)."""
+    return dataclasses.make_dataclass(f"{mechanism.title().replace('_', '')}Parameters",
+                                      [(n, Any) for n in names], frozen=True)
 
 
 @dataclass(frozen=True)
@@ -134,7 +93,7 @@ class ParameterSet:
 
     mechanism: str
     variant: str
-    values: SliderCrankParameters | QuickReturnParameters
+    values: Any  # frozen dataclass, one field per parameter of the file
     units: Mapping[str, str]
     sources: Mapping[str, str]
     initial: InitialConditions
@@ -150,8 +109,17 @@ class ParameterSet:
             raise AttributeError(f"parameter set {self.mechanism}/{self.variant} has no field {name!r}") from None
 
 
-def available_mechanisms() -> tuple[str, ...]:
-    return tuple(PARAMETER_CLASSES)
+def available_mechanisms(reference_dir: Path | None = None) -> tuple[str, ...]:
+    """Mechanisms with a parameter file: ``reference/<name>.toml`` whose ``[meta] mechanism`` is ``name``."""
+    found = []
+    for path in sorted((reference_dir or REFERENCE_DIR).glob("*.toml")):
+        try:
+            meta = _read(path).get("meta", {})
+        except ParameterError:
+            continue
+        if isinstance(meta, dict) and meta.get("mechanism") == path.stem:
+            found.append(path.stem)
+    return tuple(found)
 
 
 def available_variants(mechanism: str, reference_dir: Path | None = None) -> tuple[str, ...]:
@@ -160,10 +128,9 @@ def available_variants(mechanism: str, reference_dir: Path | None = None) -> tup
 
 
 def _path_for(mechanism: str, reference_dir: Path | None) -> Path:
-    if mechanism not in PARAMETER_CLASSES:
-        raise ParameterError(
-            f"unknown mechanism {mechanism!r}; valid choices: {', '.join(PARAMETER_CLASSES)}"
-        )
+    known = available_mechanisms(reference_dir)
+    if mechanism not in known:
+        raise ParameterError(f"unknown mechanism {mechanism!r}; valid choices: {', '.join(known)}")
     return (reference_dir or REFERENCE_DIR) / f"{mechanism}.toml"
 
 
@@ -182,7 +149,8 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
 
     Parameters
     ----------
-    mechanism : {'slider_crank', 'quick_return'}
+    mechanism : str
+        One of :func:`available_mechanisms` (a parameter file ``reference/<mechanism>.toml``).
     variant : str
         A key of the file's ``[variants]`` table; ``'seed'`` is the paper's set.
     reference_dir : Path, optional
@@ -199,8 +167,6 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
 
 def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path: Path) -> ParameterSet:
     """Validate an already-parsed parameter document (see :func:`load_parameters`)."""
-    cls = PARAMETER_CLASSES[mechanism]
-    fields = {f.name: f for f in dataclasses.fields(cls)}
     problems: list[str] = []
 
     def problem(key: str, value: Any, rule: str) -> None:
@@ -211,27 +177,43 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
         problem(key, "...", "unknown top-level table (allowed: meta, parameters, initial_conditions, variants)")
 
     params = raw.get("parameters", {})
+    required = required_parameters(mechanism)
+    for name in required:
+        if name not in params:
+            problem(f"parameters.{name}", None, f"missing (the description of {mechanism} needs it; physics "
+                                               f"parameters have no defaults)")
     values: dict[str, Any] = {}
     units: dict[str, str] = {}
     sources: dict[str, str] = {}
-    for name in fields:
-        if name not in params:
-            problem(f"parameters.{name}", None, "missing (physics parameters have no defaults)")
+    fields: dict[str, dict[str, Any]] = {}     # name -> {'rule': ...} or {'choices': (...)}
+    if not params:
+        problem("parameters", params, "missing or empty (every physics parameter is listed with its value)")
     for name, entry in params.items():
         key = f"parameters.{name}"
-        if name not in fields:
-            problem(key, entry, f"unknown parameter for {mechanism} (known: {', '.join(fields)})")
+        if required and name not in required:
+            problem(key, entry, f"unknown parameter for {mechanism} (its description reads: {', '.join(required)})")
             continue
         if not isinstance(entry, dict):
-            problem(key, entry, "must be a table with keys value, unit, source")
+            problem(key, entry, "must be a table with keys value, unit, source, doc and rule (or choices)")
             continue
-        extra = set(entry) - {"value", "unit", "source"}
-        missing = {"value", "unit", "source"} - set(entry)
+        extra = set(entry) - ENTRY_KEYS
+        missing = {"value", "unit", "source", "doc"} - set(entry)
         if extra:
-            problem(key, sorted(extra), "unknown keys (allowed: value, unit, source)")
+            problem(key, sorted(extra), f"unknown keys (allowed: {', '.join(sorted(ENTRY_KEYS))})")
         if missing:
-            problem(key, sorted(missing), "missing keys (every parameter needs value, unit and source)")
+            problem(key, sorted(missing), "missing keys (every parameter needs value, unit, source and doc)")
             continue
+        if ("rule" in entry) == ("choices" in entry):
+            problem(key, entry.get("rule", entry.get("choices")), "needs exactly one of rule (numbers) or choices (strings)")
+            continue
+        if "rule" in entry and entry["rule"] not in RULES:
+            problem(f"{key}.rule", entry["rule"], f"must be one of {', '.join(RULES)}")
+            continue
+        if "choices" in entry and (not isinstance(entry["choices"], list) or not entry["choices"]
+                                   or not all(isinstance(c, str) for c in entry["choices"])):
+            problem(f"{key}.choices", entry["choices"], "must be a non-empty list of strings")
+            continue
+        fields[name] = {"rule": entry["rule"]} if "rule" in entry else {"choices": tuple(entry["choices"])}
         values[name] = entry["value"]
         units[name] = entry["unit"]
         sources[name] = entry["source"]
@@ -253,7 +235,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
                 sources[name] = f"variant '{variant}': {variant_note}"
 
     for name, value in values.items():
-        meta = fields[name].metadata
+        meta = fields[name]
         key = f"variants.{variant}.{name}" if name in overridden else f"parameters.{name}"
         if "choices" in meta:
             if not isinstance(value, str) or value not in meta["choices"]:
@@ -265,7 +247,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
             else:
                 values[name] = float(value)
 
-    initial = _parse_initial(raw.get("initial_conditions", {}), cls, problem)
+    initial = _parse_initial(raw.get("initial_conditions", {}), problem)
     if problems:
         raise ParameterError(f"{path} (mechanism {mechanism}, variant {variant}):\n" + "\n".join(problems))
 
@@ -274,7 +256,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     return ParameterSet(
         mechanism=mechanism,
         variant=variant,
-        values=cls(**values),
+        values=_values_class(mechanism, list(values))(**values),
         units=MappingProxyType(units),
         sources=MappingProxyType(sources),
         initial=initial,
@@ -284,7 +266,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     )
 
 
-def _parse_initial(raw: Mapping[str, Any], cls: type, problem) -> InitialConditions:
+def _parse_initial(raw: Mapping[str, Any], problem) -> InitialConditions:
     printed = raw.get("printed", {})
     consistent = raw.get("consistent", {})
 

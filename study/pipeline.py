@@ -183,6 +183,7 @@ class CaseList:
     summary: str
     cases: tuple[Case, ...]
     path: Path
+    report: Mapping[str, Any] = field(default_factory=dict)   # the list's [report] table: its section's choices
 
 
 def _label(value: Any) -> str:
@@ -283,7 +284,10 @@ def load_case_list(path: Path) -> CaseList:
     cases = []
     for g in groups:
         cases += _expand_group(study, g, f"{path.name} group {g['name']!r}")
-    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path)
+    report = data.get("report", {})
+    if not isinstance(report, dict):
+        raise CaseListError(f"{path}: [report] must be a table (the report section's choices), got {report!r}")
+    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report)
 
 
 def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:

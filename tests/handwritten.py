@@ -99,3 +99,12 @@ def cartesian_pendulum(length=1.0, mass=1.0, g=9.81) -> EquationsOfMotion:
         name="cartesian_pendulum",
         potential_energy=lambda q: mass * g * q[1],
     )
+
+
+def smooth_cutting_force(v, x, vx):
+    """001's cutting force with the study's tanh ramps, typed from the parameter file's definition."""
+    from math import tanh
+
+    def s(u):
+        return 0.5 * (1.0 + tanh(u))
+    return v.F_cut * s(-vx / v.v_ramp) * s((x - v.x_cut_min) / v.x_ramp) * s((v.x_cut_max - x) / v.x_ramp)

@@ -331,12 +331,12 @@ def test_exact_friction_with_switched_cutting_law():
     cross zero at the same instant, and each reversal is located once."""
     import dataclasses
 
-    from study.mechanisms import initial_state, quick_return
+    from study.mechanisms import equations, initial_state
     from study.params import load_parameters
 
     ps = load_parameters("quick_return", "seed")
     ps = dataclasses.replace(ps, values=dataclasses.replace(ps.values, mu_guide=0.1))
-    eom = quick_return.equations(ps)
+    eom = equations(ps)
     st = initial_state(ps, eom)
     r = simulate(eom, st.q, st.qd, t_end=0.3, friction="exact")
     tr = [x for x in r.stats["friction_transitions"] if x["contact"]]

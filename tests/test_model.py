@@ -110,8 +110,7 @@ def test_cutting_force_generalized_like_paper_b_matrix():
     """The builder's cutting load equals 001's B column [0, -l2 sin q2, -l3 sin q3] times F_x."""
     ps, eom = load("quick_return", "smooth_cutting")
     v = ps.values
-    law = __import__("study.mechanisms.quick_return", fromlist=["cutting_law"]).cutting_law(ps)
-    hand = handwritten.quick_return(v, cutting_force=lambda t, x, vx: law(t, np.array([x, v.h2]), np.array([vx, 0.0]))[0])
+    hand = handwritten.quick_return(v, cutting_force=lambda t, x, vx: handwritten.smooth_cutting_force(v, x, vx))
     tol = tolerance("round_off")
     for q, qd in configurations(eom, ps):
         theirs = hand.forces(0.0, q, qd)
@@ -122,7 +121,7 @@ def test_on_off_cutting_law_indicators_and_modes():
     ps, eom = load("quick_return", "seed")
     q = initial_state(ps, eom)
     v_d, lo, hi = eom.indicators(0.0, q.q, q.qd)
-    x_d = eom.points["D"](q.q)[0]
+    x_d = eom.points["ram.D"](q.q)[0]
     assert lo == pytest.approx(x_d - ps.x_cut_min) and hi == pytest.approx(ps.x_cut_max - x_d)
     cut_on = eom.applied_forces(0.0, q.q, q.qd, mode=(-1, 1, 1))["cutting"]
     cut_off = eom.applied_forces(0.0, q.q, q.qd, mode=(1, 1, 1))["cutting"]
@@ -131,7 +130,7 @@ def test_on_off_cutting_law_indicators_and_modes():
 
 
 def test_generated_code_is_cached(tmp_path, monkeypatch):
-    from study.mechanisms import quick_return
+    from study.mechanisms import builder
     from study.model import compile as comp
     from study.params import load_parameters
 
@@ -140,7 +139,7 @@ def test_generated_code_is_cached(tmp_path, monkeypatch):
     calls = []
     real = comp.derive
     monkeypatch.setattr(comp, "derive", lambda b: calls.append(1) or real(b))
-    quick_return.equations(ps)
-    quick_return.equations(ps)
+    builder(ps).compile()
+    builder(ps).compile()
     assert len(calls) == 1
     assert len(list((tmp_path / "codegen").glob("quick_return_*.py"))) == 1

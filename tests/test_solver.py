@@ -7,7 +7,7 @@ import pytest
 
 import handwritten
 from study import simulate
-from study.mechanisms import initial_state, load, quick_return
+from study.mechanisms import equations, initial_state, load
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import ACCELERATION_SOLVERS, make_acceleration_solver
@@ -93,7 +93,7 @@ def test_on_off_switches_are_located():
 def energy_free_quick_return():
     ps = load("quick_return", "smooth_cutting")[0]
     free = dataclasses.replace(ps, values=dataclasses.replace(ps.values, M=0.0, F_cut=0.0))
-    return free, quick_return.equations(free)
+    return free, equations(free)
 
 
 def test_energy_conserved_without_drive_and_cutting():

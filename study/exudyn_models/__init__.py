@@ -1,22 +1,22 @@
-"""Independent Exudyn models of the study's mechanisms (the only package that imports ``exudyn``).
+"""Exudyn models of the study's mechanisms, generated from their joint-level descriptions (the only
+package that imports ``exudyn``).
 
-Each mechanism module exposes ``run(ps, t_end, h, solver='index3', output_step=None,
-friction='regularized', eps=...) -> study.results.SimulationResult``. The models are built from the
-parameter set's values and the bodies' kinematics only; the in-house equations of motion are used
-for nothing but the consistent initial state and for evaluating the in-house Phi on Exudyn's
-coordinates (so both codes are compared like for like).
+``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=...) ->
+study.results.SimulationResult`` builds the Exudyn model of ``ps``'s description
+(:mod:`study.exudyn_models.translate`); there is no per-mechanism code. The in-house equations of
+motion are used for nothing but the consistent initial state and for evaluating the in-house Phi on
+Exudyn's coordinates (so both codes are compared like for like); the load laws are evaluated from
+Exudyn's own kinematics.
 
 Modules
 -------
 common
-    Solver settings, solver-name validation, sensors -> arrays, the reaction-force guard, CPU timing.
-slider_crank
-    Mechanism A (crank, rod, slider on a horizontal guide with Coulomb friction).
-quick_return
-    Mechanism B (crank, rocker, connecting rod, sliding block, ram).
+    Solver settings, argument checks, model building blocks, sensors -> arrays, the reaction-force
+    guard, the regularized guide friction, CPU timing.
+translate
+    Description -> Exudyn model -> SimulationResult, and the initial accelerations / multipliers.
 """
 
-from study.exudyn_models import quick_return, slider_crank
 from study.exudyn_models.common import (
     DEFAULT_EPS,
     EXPLICIT_SOLVERS,
@@ -26,27 +26,16 @@ from study.exudyn_models.common import (
     ExudynSolverError,
     exudyn_version,
 )
-
-MODELS = {"slider_crank": slider_crank, "quick_return": quick_return}
-
-
-def run(ps, t_end, h, **kwargs):
-    """Dispatch to ``MODELS[ps.mechanism].run`` (see the mechanism modules for the arguments)."""
-    if ps.mechanism not in MODELS:
-        raise ValueError(f"no Exudyn model for mechanism {ps.mechanism!r}; valid choices: {', '.join(MODELS)}")
-    return MODELS[ps.mechanism].run(ps, t_end, h, **kwargs)
-
+from study.exudyn_models.translate import initial_accelerations, run
 
 __all__ = [
     "DEFAULT_EPS",
     "EXPLICIT_SOLVERS",
     "FRICTION_MODES",
     "IMPLICIT_SOLVERS",
-    "MODELS",
     "ExudynModelError",
     "ExudynSolverError",
     "exudyn_version",
-    "quick_return",
+    "initial_accelerations",
     "run",
-    "slider_crank",
 ]

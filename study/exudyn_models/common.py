@@ -1,8 +1,8 @@
 """Shared machinery of the Exudyn models: argument checks, solver settings, model building,
 the guarded reaction-force reading, sensors -> arrays, CPU timing.
 
-Everything Exudyn-specific that both mechanism modules need lives here, so the mechanism modules
-only describe bodies, joints and loads.
+Everything Exudyn-specific the translator (:mod:`study.exudyn_models.translate`) needs that does not
+depend on a description lives here.
 
 Verified Exudyn 1.13.6 behaviour this module relies on (see the docstrings for where it matters):
 
@@ -173,7 +173,7 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int) -> exu.
         ``timeIntegration.computeLoadsJacobian``: 2 differentiates the user-function loads
         numerically w.r.t. position and velocity coordinates (needed for the regularized friction:
         with 0, Newton diverges on tanh(v/1e-3) friction); 0 leaves loads out of the Jacobian
-        (each mechanism module says when that is enough).
+        (the translator says when that is enough: study.exudyn_models.translate.loads_jacobian).
     """
     s = exu.SimulationSettings()
     ti = s.timeIntegration
@@ -274,14 +274,17 @@ class Model:
                                                                         storeInternal=True, writeToFile=False))
         return obj
 
-    def prismatic(self, name: str, marker0: int, marker1: int) -> int:
-        """PrismaticJoint2D along marker 0's local x axis, relative rotation locked.
+    def prismatic(self, name: str, marker0: int, marker1: int, axis0=(1.0, 0.0), normal1=(0.0, 1.0)) -> int:
+        """PrismaticJoint2D along ``axis0`` (marker 0's body frame), ``normal1`` the normal in marker 1's body
+        frame, relative rotation locked.
 
         Sensor 'ForceLocal' = force on the marker-0 body in the marker-0 *body* frame (the constraint
         torque is not part of it).
         """
-        obj = self.mbs.AddObject(ObjectJointPrismatic2D(markerNumbers=[marker0, marker1], axisMarker0=[1.0, 0.0, 0.0],
-                                                        normalMarker1=[0.0, 1.0, 0.0], constrainRotation=True))
+        obj = self.mbs.AddObject(ObjectJointPrismatic2D(markerNumbers=[marker0, marker1],
+                                                        axisMarker0=[float(axis0[0]), float(axis0[1]), 0.0],
+                                                        normalMarker1=[float(normal1[0]), float(normal1[1]), 0.0],
+                                                        constrainRotation=True))
         self.joints[name] = (obj, "prismatic")
         self.sensors[(name, "force")] = self.mbs.AddSensor(SensorObject(objectNumber=obj,
                                                                         outputVariableType=OVT.ForceLocal,
@@ -294,7 +297,11 @@ class Model:
         return self.mbs.AddLoad(LoadTorqueVector(markerNumber=marker, loadVector=[0.0, 0.0, 0.0],
                                                  loadVectorUserFunction=user))
 
-    def force(self, marker: int, user: Callable) -> int:
+    def force(self, marker: int, user: Callable | None = None, value: tuple[float, float] | None = None) -> int:
+        """A global-frame force at a marker: constant ``value`` (fx, fy) or a user function."""
+        if user is None:
+            return self.mbs.AddLoad(LoadForceVector(markerNumber=marker,
+                                                    loadVector=[float(value[0]), float(value[1]), 0.0]))
         return self.mbs.AddLoad(LoadForceVector(markerNumber=marker, loadVector=[0.0, 0.0, 0.0],
                                                 loadVectorUserFunction=user))
 
@@ -375,17 +382,20 @@ class ReactionGuard:
 
 
 class GuideFriction:
-    """Regularized Coulomb friction plus constant resistance on a body sliding along global x.
+    """Regularized Coulomb friction plus constant resistance at a point sliding along a fixed axis.
 
-    Tangential force on the body (global x):
-    ``coulomb = -mu |N| tanh(v/eps)``, ``resistance = -F tanh(v/eps)``, with v the body's x-velocity
-    and N the guide's normal reaction from ``guard``. The values of the last user-function call of
-    each step (the converged residual evaluation) are recorded in ``history`` (one row per step plus
-    the initial-acceleration solve at t = 0): [N used, v, coulomb, resistance].
+    Tangential force on the slider at its point (along the unit ``axis``, global frame):
+    ``coulomb = -mu |N| tanh(v/eps)``, ``resistance = -F tanh(v/eps)``, with v = axis . (velocity of
+    the slider point, from the point's marker) and N the guide's normal reaction from ``guard``. The
+    values of the last user-function call of each step (the converged residual evaluation) are recorded
+    in ``history`` (one row per step plus the initial-acceleration solve at t = 0):
+    [N used, v, coulomb, resistance].
     """
 
-    def __init__(self, model: Model, body: str, guard: ReactionGuard, mu: float, resistance: float, eps: float):
-        self.node = model.node(body)
+    def __init__(self, model: Model, marker: int, axis, guard: ReactionGuard, mu: float, resistance: float,
+                 eps: float):
+        self.marker = marker
+        self.axis = (float(axis[0]), float(axis[1]))
         self.guard = guard
         self.mu, self.resistance, self.eps = float(mu), float(resistance), float(eps)
         self.last = (float("nan"),) * 4
@@ -394,12 +404,14 @@ class GuideFriction:
         model.post_step.append(self._post_step)
 
     def __call__(self, mbs, t, load_vector):
-        v = mbs.GetNodeOutput(self.node, OVT.Velocity)[0]
+        vel = mbs.GetMarkerOutput(self.marker, OVT.Velocity)
+        v = self.axis[0] * vel[0] + self.axis[1] * vel[1]
         n = self.guard.value(mbs)
         s = math.tanh(v / self.eps)
         coulomb, resistance = -self.mu * abs(n) * s, -self.resistance * s
         self.last = (n, v, coulomb, resistance)
-        return [coulomb + resistance, 0.0, 0.0]
+        f = coulomb + resistance
+        return [f * self.axis[0], f * self.axis[1], 0.0]
 
     def _pre_step(self, mbs, t) -> None:
         if not self.history:           # before the first step: the initial-acceleration evaluation
@@ -460,35 +472,33 @@ def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictio
 
 
 # --------------------------------------------------------------------------------------------
-# running a mechanism module
+# running a built model
 # --------------------------------------------------------------------------------------------
-# A mechanism module provides MECHANISM, build(ps, q0, qd0, friction, eps) -> (Model, loads with
-# 'friction'), loads_jacobian(ps, friction), initial_values(model) -> (qdd, lam) and
-# result(ps, eom, model, loads, grid, solver, friction, eps, stats) -> SimulationResult.
-def run_model(mech, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
+# ``build(ps, q0, qd0, friction, eps)`` returns an object with ``model`` (Model), ``frictions``
+# (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
+# ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
+def run_model(build, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
               eps: float) -> SimulationResult:
-    """Build ``mech``'s model at the in-house consistent initial state, solve it, return its result."""
+    """Build the model at the in-house consistent initial state, solve it, return its result."""
     grid = check_arguments(t_end, h, solver, output_step, friction, eps)
-    if ps.mechanism != mech.MECHANISM:
-        raise ValueError(f"parameter set is for {ps.mechanism!r}, not {mech.MECHANISM!r}")
-    eom = mechanisms.module(mech.MECHANISM).equations(ps)
+    eom = mechanisms.equations(ps)
     state0 = mechanisms.initial_state(ps, eom)
-    model, loads = mech.build(ps, state0.q, state0.qd, friction, eps)
-    settings = simulation_settings(grid, solver, mech.loads_jacobian(ps, friction))
+    built = build(ps, state0.q, state0.qd, friction, eps)
+    settings = simulation_settings(grid, solver, built.loads_jacobian)
     stats = {}
     if solver in IMPLICIT_SOLVERS:
-        stats.update(seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else []))
-    stats.update(solve(model, settings, solver))
-    return mech.result(ps, eom, model, loads, grid, solver, friction, eps, stats)
+        stats.update(seed_reaction_guards(built.model, settings, built.frictions))
+    stats.update(solve(built.model, settings, solver))
+    return built.result(eom, grid, solver, stats)
 
 
-def initial_accelerations(mech, ps, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
-    """``mech``'s accelerations and multipliers at a state, from Exudyn's solver initialization alone."""
+def initial_accelerations(build, ps, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
+    """Accelerations and multipliers at a state, from Exudyn's solver initialization alone."""
     check_arguments(1.0, 1.0, "index3", None, friction, eps)
-    model, loads = mech.build(ps, q, qd, friction, eps)
-    settings = simulation_settings(RunGrid(1.0, 1.0, 1, 1), "index3", mech.loads_jacobian(ps, friction))
-    seed_reaction_guards(model, settings, [loads["friction"]] if loads["friction"] else [])
-    return initialize(model, settings, lambda: mech.initial_values(model))
+    built = build(ps, q, qd, friction, eps)
+    settings = simulation_settings(RunGrid(1.0, 1.0, 1, 1), "index3", built.loads_jacobian)
+    seed_reaction_guards(built.model, settings, built.frictions)
+    return initialize(built.model, settings, built.initial_values)
 
 
 # --------------------------------------------------------------------------------------------

@@ -6,10 +6,9 @@ cache
     Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``.
 signatures
     The numba function types shared by the generated code and the kernels.
-loads
-    Load laws (cutting force, affine torques) as numba functions, and their extraction from a description.
 codegen
-    sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``).
+    sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``);
+    the load laws are the description's expressions, compiled with the rest.
 linalg
     Small dense LU with partial pivoting.
 dynamics

@@ -22,7 +22,6 @@ import numpy as np
 from study.fast.codegen import generated_module
 from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
                                  STAB_BAUMGARTE, STAB_NONE, STAB_PROJECTION, STAB_SLIDING, accelerations_entry)
-from study.fast.loads import load_specs, load_vector
 from study.fast.loop import DONE, FAIL_PROJECTION, FAIL_RHS, FAIL_STEP, integrate_segment
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
@@ -55,7 +54,7 @@ class CompiledModel:
     ----------
     module : the generated module (``evaluate``, ``indicators``, ``kinematics``)
     p : (k,) parameter vector in ``module.PARAMETERS`` order
-    lp : load parameters (``study.fast.loads.load_vector``)
+    lp : load parameters (empty: the laws' numbers are parameters in ``p``)
     n_load_indicators : switching functions of the loads
     """
 
@@ -66,22 +65,21 @@ class CompiledModel:
     work_names: tuple[str, ...]
 
 
-_MODELS: dict[str, CompiledModel] = {}
+_MODELS: dict[tuple, CompiledModel] = {}
 
 
 def compiled_model(ps: ParameterSet) -> CompiledModel:
-    """The compiled model of a built-in mechanism's parameter set (generated once, then from disk)."""
-    if ps.sha256 not in _MODELS:
-        from study.mechanisms import module as mechanism_module
+    """The compiled model of a described mechanism's parameter set (generated once, then from disk)."""
+    key = (ps.mechanism, ps.values)   # the values themselves: a replaced parameter set keeps its sha256
+    if key not in _MODELS:
+        from study.mechanisms import builder
 
-        b = mechanism_module(ps.mechanism).describe(ps)
+        b = builder(ps)
         b.validate()
-        torques, points = load_specs(b)
-        mod = generated_module(b, torques, points)
+        mod = generated_module(b)
         p = np.array([float(b.values[k]) for k in mod.PARAMETERS])
-        names = tuple(pt.name for pt in points) + tuple(t.name for t in torques)  # the reference's work order
-        _MODELS[ps.sha256] = CompiledModel(mod, p, load_vector(torques, points), mod.N_LOAD_INDICATORS, names)
-    return _MODELS[ps.sha256]
+        _MODELS[key] = CompiledModel(mod, p, np.zeros(0), mod.N_LOAD_INDICATORS, tuple(mod.WORK_NAMES))
+    return _MODELS[key]
 
 
 def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,

@@ -1,43 +1,102 @@
-"""Canned mechanisms, each built from its parameter set: ``load(name, variant) -> (ParameterSet, EOM)``."""
+"""Mechanisms: one joint-level description module per mechanism, built from its parameter set.
+
+A mechanism ``name`` is a parameter file ``reference/<name>.toml`` plus a module
+``study.mechanisms.<name>`` with ``describe(ps) -> study.model.joints.Description`` (and ``LABEL``).
+Nothing else is per-mechanism code: the equations in either coordinate set, the compiled kernels,
+the Exudyn model and the joint reactions are all generated from the description.
+"""
 
 from __future__ import annotations
 
+import importlib
 from types import ModuleType
 
 import numpy as np
+import sympy as sp
 
-from study.mechanisms import quick_return, slider_crank
 from study.model import EquationsOfMotion
-from study.params import ParameterSet, load_parameters
+from study.model.builder import MechanismBuilder
+from study.model.coordinates import COORDINATE_SETS, lower
+from study.model.joints import Description
+from study.params import ParameterSet, available_mechanisms, load_parameters
 from study.solver.initial import ConsistentState, InitialConditionError, consistent_initial_conditions
-
-MECHANISMS: dict[str, ModuleType] = {"slider_crank": slider_crank, "quick_return": quick_return}
 
 
 def module(name: str) -> ModuleType:
-    if name not in MECHANISMS:
-        raise ValueError(f"unknown mechanism {name!r}; valid choices: {', '.join(MECHANISMS)}")
-    return MECHANISMS[name]
+    """The description module of a mechanism (ValueError naming the valid choices)."""
+    known = available_mechanisms()
+    if name not in known:
+        raise ValueError(f"unknown mechanism {name!r}; valid choices: {', '.join(known)}")
+    return importlib.import_module(f"study.mechanisms.{name}")
 
 
-def load(name: str, variant: str = "seed") -> tuple[ParameterSet, EquationsOfMotion]:
-    """Parameter set and compiled equations of a built-in mechanism variant."""
-    mod = module(name)
+def description(ps: ParameterSet) -> Description:
+    """The joint-level description of a parameter set's mechanism."""
+    return module(ps.mechanism).describe(ps)
+
+
+def label(name: str) -> str:
+    """Human-readable name of a mechanism (its module's ``LABEL``)."""
+    return getattr(module(name), "LABEL", name)
+
+
+def coordinate_unit(name: str) -> str:
+    """Unit of a mechanism's relative coordinates (its module's ``COORDINATE_UNIT``, default 'rad')."""
+    return getattr(module(name), "COORDINATE_UNIT", "rad")
+
+
+def constraint_unit(name: str) -> str:
+    """Unit of a mechanism's constraint rows: 'm' (joint gaps), 'rad', or 'm, rad' when mixed."""
+    rows = equations(load_parameters(name)).constraint_names
+    units = sorted({"rad" if r.endswith("_angle") else "m" for r in rows})
+    return ", ".join(units)
+
+
+def builder(ps: ParameterSet, coordinates: str = "relative") -> MechanismBuilder:
+    """The body-level equations' builder of a parameter set in a coordinate set."""
+    return lower(description(ps), coordinates)
+
+
+_EQUATIONS: dict[tuple, EquationsOfMotion] = {}
+
+
+def equations(ps: ParameterSet, coordinates: str = "relative") -> EquationsOfMotion:
+    """Compiled equations of motion of a parameter set ('relative' or 'absolute' coordinates)."""
+    if coordinates not in COORDINATE_SETS:
+        raise ValueError(f"unknown coordinate set {coordinates!r}; valid choices: {', '.join(COORDINATE_SETS)}")
+    key = (ps.mechanism, ps.values, coordinates)   # the values themselves: a replaced set keeps its sha256
+    if key not in _EQUATIONS:
+        _EQUATIONS[key] = builder(ps, coordinates).compile(ps.sha256)
+    return _EQUATIONS[key]
+
+
+def load(name: str, variant: str = "seed", coordinates: str = "relative") -> tuple[ParameterSet, EquationsOfMotion]:
+    """Parameter set and compiled equations of a mechanism variant."""
     ps = load_parameters(name, variant)
-    return ps, mod.equations(ps)
+    return ps, equations(ps, coordinates)
 
 
-def initial_state(ps: ParameterSet, eom: EquationsOfMotion) -> ConsistentState:
-    """Consistent q(0), qd(0) from the parameter file's specification, checked against its branch.
+def on_branch(ps: ParameterSet, q: np.ndarray) -> bool:
+    """Whether relative coordinates q lie on the description's assembly branch (True without one)."""
+    d = description(ps)
+    if d.branch is None:
+        return True
+    expr = d.branch[0].xreplace({getattr(d.p, k): float(v) for k, v in d.values.items()})
+    return float(sp.lambdify([list(d.q)], expr, "math")(list(map(float, q)))) > 0
+
+
+def initial_state(ps: ParameterSet, eom: EquationsOfMotion | None = None) -> ConsistentState:
+    """Consistent q(0), qd(0) (relative coordinates) from the parameter file, checked against its branch.
 
     Newton starts from the printed q(0) with the independent coordinates replaced by the
     specified values (``[initial_conditions.consistent]``).
     """
+    eom = equations(ps) if eom is None else eom
     ic = ps.initial
     guess = np.array(ic.printed_q, dtype=float)
     guess[list(ic.independent)] = ic.q_independent
     state = consistent_initial_conditions(eom, guess, ic.independent, ic.qd_independent)
-    if not module(ps.mechanism).on_branch(ps, state.q):
+    if not on_branch(ps, state.q):
         raise InitialConditionError(
             f"{ps.mechanism}: Newton from the printed q(0) converged to q = {state.q}, which is not on the "
             f"assembly branch '{ic.branch}'")

@@ -1,61 +1,46 @@
 """Mechanism A: slider-crank with Coulomb friction in the slider guide (paper 000, sec. 3).
 
-Coordinates q = [q1, q2]: crank angle, rod angle relative to the crank (rod absolute angle q1+q2).
-A = l1 (cos q1, sin q1); C2 = A - c2 e(q1+q2); B = A - l2 e(q1+q2), e(a) = (cos a, sin a).
-The slider guide is the line y = 0: its normal gap y_B is the constraint (000 eq. 22), so its
-multiplier is the normal force. The resistance F and the Coulomb friction act through that contact.
+Relative coordinates q = [q1, q2]: crank angle, rod angle relative to the crank (rod absolute
+angle q1 + q2). The crank is balanced (centre of mass at its pivot O). A = l1 e(q1);
+C2 = A - c2 e(q1+q2); B = A - l2 e(q1+q2). The slider B moves on the guide y = 0, whose normal
+gap y_B is 000's constraint (eq. 22), so its multiplier is the normal force; the resistance F and
+the Coulomb friction act through that contact.
 """
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
 import sympy as sp
 
-from study.model import EquationsOfMotion, MechanismBuilder
-from study.model.builder import constant_torque
+from study.model.joints import GROUND, Description, Friction
 from study.params import ParameterSet
 
-COORDINATES = ("q1", "q2")
+LABEL = "slider-crank (paper 000)"
+#: Parameters the description reads (the order fixes the generated code's parameter layout).
+PARAMETERS = ("J1", "m1", "J2", "m2", "m3", "J3", "l1", "l2", "c2", "g", "mu", "F", "alpha", "M", "alpha_law")
 
 
-def _damper(alpha: float):
-    def law(t, angle, rate):
-        return -alpha * rate
-    return law
-
-
-def describe(ps: ParameterSet) -> MechanismBuilder:
-    """The body-level description of the slider-crank for one parameter set."""
+def describe(ps: ParameterSet) -> Description:
+    """The joint-level description of the slider-crank for one parameter set."""
     v = ps.values
-    numeric = {k: getattr(v, k) for k in ("J1", "m1", "J2", "m2", "m3", "J3", "l1", "l2", "c2", "g", "mu", "F",
-                                           "alpha")}
-    b = MechanismBuilder("slider_crank", COORDINATES, numeric)
-    p = b.p
-    q1, q2 = b.q
-    ax, ay = p.l1 * sp.cos(q1), p.l1 * sp.sin(q1)
-    rod = q1 + q2
-    crank = b.body("crank", 0, 0, q1, p.m1, p.J1)
-    b.body("rod", ax - p.c2 * sp.cos(rod), ay - p.c2 * sp.sin(rod), rod, p.m2, p.J2)
-    b.body("slider", ax - p.l2 * sp.cos(rod), ay - p.l2 * sp.sin(rod), 0, p.m3, p.J3)
-    b.point("A", ax, ay)
-    slider_point = b.point("B", ax - p.l2 * sp.cos(rod), ay - p.l2 * sp.sin(rod))
-    b.gravity(p.g)
-    b.sliding_contact("guide", slider_point, normal=(0, 1), offset=0, tangent=(1, 0),
-                      mu_static=p.mu, mu_kinetic=p.mu, resistance=p.F)
-    b.torque("drive", crank, constant_torque(v.M))
-    if v.alpha_law == "spring":
-        b.potential("alpha_spring", p.alpha * q1 ** 2 / 2)
-    else:
-        b.torque("alpha_damper", crank, _damper(v.alpha))
-    return b
-
-
-def equations(ps: ParameterSet) -> EquationsOfMotion:
-    return describe(ps).compile(ps.sha256)
-
-
-def on_branch(ps: ParameterSet, q: np.ndarray) -> bool:
-    """The assembly branch implied by 000 eqs. (13), (32): cos(q1+q2) > 0 (B beyond A from O)."""
-    return math.cos(q[0] + q[1]) > 0
+    d = Description("slider_crank", ("q1", "q2"), {k: getattr(v, k) for k in PARAMETERS}, LABEL)
+    p = d.p
+    q1, q2 = d.q
+    d.ground("O", 0, 0)
+    d.ground("guide", 0, 0)
+    d.body("crank", p.m1, p.J1, {"O": (0, 0), "A": (p.l1, 0)}, angle=q1)
+    d.body("rod", p.m2, p.J2, {"A": (p.c2, 0), "B": (p.c2 - p.l2, 0)}, angle=q1 + q2)
+    d.body("slider", p.m3, p.J3, {"B": (0, 0)}, angle=0)
+    d.revolute("O", (GROUND, "O"), ("crank", "O"))
+    d.revolute("A", ("crank", "A"), ("rod", "A"))
+    d.revolute("B", ("rod", "B"), ("slider", "B"))
+    d.prismatic("guide", slider=("slider", "B"), guide=(GROUND, "guide"), axis=(1, 0), normal=(0, 1),
+                friction=Friction(p.mu, p.mu, p.F))
+    d.gravity(p.g)
+    d.torque("drive", "crank", p.M)
+    if v.alpha_law == "spring":      # 000's '-alpha q1' read as a torsion spring on the crank
+        d.torsion_spring("alpha_spring", "crank", p.alpha)
+    else:                            # ... or as a viscous damper
+        d.torque("alpha_damper", "crank", -p.alpha * d.rate("crank"))
+    # 000 eqs. (13), (32): B lies beyond A from O, cos(q1+q2) > 0
+    d.assembly_branch(sp.cos(q1 + q2), "cos(q1+q2) > 0")
+    return d

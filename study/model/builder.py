@@ -16,9 +16,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import sympy as sp
+
+from study.model.joints import DescriptionError
 
 Expr = sp.Expr
 
@@ -42,27 +44,20 @@ class Point:
 
 @dataclass(frozen=True)
 class PointLoad:
-    """A force at a point whose value comes from a numeric law.
-
-    ``law(t, r, v, mode) -> (fx, fy)`` gets the point's position r and velocity v (shape (2,)).
-    ``indicators(t, r, v) -> sequence`` returns switching functions if the law is discontinuous;
-    between their zero crossings the law must be smooth for a frozen ``mode`` (tuple of +-1).
-    """
+    """A force (fx, fy; global frame) at a point, as expressions of t, q, qd, parameters and modes."""
 
     name: str
     point: Point
-    law: Callable[..., Sequence[float]]
-    indicators: Callable[..., Sequence[float]] | None = None
-    indicator_names: tuple[str, ...] = ()
+    components: tuple[Expr, Expr]
 
 
 @dataclass(frozen=True)
 class TorqueLoad:
-    """A torque on a body; ``law(t, angle, rate) -> tau`` (counter-clockwise positive)."""
+    """A torque on a body (counter-clockwise positive), an expression of t, q, qd, parameters and modes."""
 
     name: str
     body: Body
-    law: Callable[[float, float, float], float]
+    torque: Expr
 
 
 @dataclass(frozen=True)
@@ -76,17 +71,6 @@ class Contact:
     mu_static: Expr
     mu_kinetic: Expr
     resistance: Expr
-
-
-def constant_torque(value: float) -> Callable[[float, float, float], float]:
-    """A torque law ``law(t, angle, rate) -> value`` for :meth:`MechanismBuilder.torque`."""
-    def law(t: float, angle: float, rate: float) -> float:
-        return value
-    return law
-
-
-class DescriptionError(ValueError):
-    """The mechanism description is inconsistent; the message lists every problem."""
 
 
 class MechanismBuilder:
@@ -120,6 +104,8 @@ class MechanismBuilder:
         self.torque_loads: list[TorqueLoad] = []
         self.contacts: list[Contact] = []
         self.gravity_g: Expr | None = None
+        self.t = sp.Symbol("t", real=True)
+        self.switches: list[tuple[str, Expr, sp.Symbol]] = []
 
     # --- description -------------------------------------------------------------------------
     def body(self, name: str, x: Any, y: Any, angle: Any, mass: Any, inertia: Any) -> Body:
@@ -146,15 +132,23 @@ class MechanismBuilder:
         """A conservative load given by its potential energy (for example a spring)."""
         self.potentials.append((name, sp.sympify(expr)))
 
-    def torque(self, name: str, body: Body, law: Callable[[float, float, float], float]) -> TorqueLoad:
-        load = TorqueLoad(name, body, law)
+    def torque(self, name: str, body: Body, torque: Any) -> TorqueLoad:
+        """A torque on a body: an expression of t, q, qd, parameters and mode symbols."""
+        load = TorqueLoad(name, body, sp.sympify(torque))
         self.torque_loads.append(load)
         return load
 
-    def force(self, name: str, point: Point, law, indicators=None, indicator_names=()) -> PointLoad:
-        load = PointLoad(name, point, law, indicators, tuple(indicator_names))
+    def force(self, name: str, point: Point, fx: Any, fy: Any) -> PointLoad:
+        """A force (global frame) at a point: expressions of t, q, qd, parameters and mode symbols."""
+        load = PointLoad(name, point, (sp.sympify(fx), sp.sympify(fy)))
         self.point_loads.append(load)
         return load
+
+    def switch(self, name: str, expr: Any, mode: sp.Symbol | None = None) -> sp.Symbol:
+        """A switching function of t, q, qd; returns its mode symbol (+1/-1, frozen between switches)."""
+        mode = mode if mode is not None else sp.Symbol(f"mode_{len(self.switches)}", real=True)
+        self.switches.append((name, sp.sympify(expr), mode))
+        return mode
 
     def sliding_contact(self, name: str, point: Point, normal, offset, tangent,
                         mu_static: Any, mu_kinetic: Any, resistance: Any = 0) -> Contact:
@@ -191,6 +185,13 @@ class MechanismBuilder:
                 problems.append(f"body {b.name!r}: mass and inertia must not depend on q")
         for name, e in self.constraints + self.potentials:
             stray = e.free_symbols - time_free
+            if stray:
+                problems.append(f"{name!r} uses unknown symbols {sorted(map(str, stray))}")
+        dynamic = allowed | set(self.qd) | {self.t}
+        modes = {m for _, _, m in self.switches}
+        for name, e in [(ld.name, c) for ld in self.point_loads for c in ld.components] + \
+                [(ld.name, ld.torque) for ld in self.torque_loads] + [(n, e) for n, e, _ in self.switches]:
+            stray = e.free_symbols - dynamic - modes
             if stray:
                 problems.append(f"{name!r} uses unknown symbols {sorted(map(str, stray))}")
         for c in self.contacts:

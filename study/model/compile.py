@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import re
 import tempfile
 from pathlib import Path
 from types import ModuleType
@@ -46,6 +47,9 @@ def description_key(b: MechanismBuilder) -> str:
     parts += [sp.srepr((x.name, x.x, x.y)) for x in b.points]
     parts += [sp.srepr(c) for c in b.constraints + b.potentials]
     parts += [repr(b.gravity_g)]
+    parts += [sp.srepr((x.name, x.point.name, x.components)) for x in b.point_loads]
+    parts += [sp.srepr((x.name, x.body.name, x.torque)) for x in b.torque_loads]
+    parts += [sp.srepr(x) for x in b.switches]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
@@ -54,10 +58,15 @@ class _Printer(PythonCodePrinter):
         return expr.name
 
 
+def function_name(name: str) -> str:
+    """A valid Python identifier for a generated function named ``name`` (points are 'body.point')."""
+    return re.sub(r"\W", "_", name)
+
+
 def _function(name: str, args: str, unpack: list[str], exprs: sp.Matrix, shape: tuple[int, ...]) -> str:
     printer = _Printer({"fully_qualified_modules": True})
     flat = list(exprs)
-    lines = [f"    def {name}({args}):"] + [f"        {u}" for u in unpack]
+    lines = [f"    def {function_name(name)}({args}):"] + [f"        {u}" for u in unpack]
     if flat:
         replacements, reduced = sp.cse(flat, symbols=sp.numbered_symbols("x_"), optimizations="basic")
         for sym, e in replacements:
@@ -92,10 +101,19 @@ def generate_source(b: MechanismBuilder, eqs: SymbolicEquations) -> str:
         _function("gamma", "q, qd", uq + uqd, eqs.gamma, (r,)),
     ]
     names = ["mass", "velocity_terms", "potential", "potential_gradient", "phi", "phi_q", "gamma"]
+    modes = [m for _, _, m in b.switches]
+    um = [f"{', '.join(str(x) for x in modes)}{',' if len(modes) == 1 else ''} = mode"] if modes else []
+    for name, expr in eqs.loads.items():
+        funcs.append(_function(f"load__{name}", "t, q, qd, mode", uq + uqd + um, expr, (m,)))
+        names.append(f"load__{name}")
+    funcs.append(_function("indicators", "t, q, qd", uq + uqd, eqs.indicators, (len(modes),)))
+    names.append("indicators")
     for body in b.bodies:
         funcs.append(_function(f"angle__{body.name}", "q", uq, sp.Matrix([body.angle]), ()))
         funcs.append(_function(f"angle_jac__{body.name}", "q", uq, eqs.angle_jacobians[body.name], (m,)))
-        names += [f"angle__{body.name}", f"angle_jac__{body.name}"]
+        bias = (eqs.angle_jacobians[body.name] * b.qd).jacobian(b.q) * b.qd
+        funcs.append(_function(f"angle_bias__{body.name}", "q, qd", uq + uqd, bias, ()))
+        names += [f"angle__{body.name}", f"angle_jac__{body.name}", f"angle_bias__{body.name}"]
     for pt in b.points:
         funcs.append(_function(f"pos__{pt.name}", "q", uq, eqs.point_positions[pt.name], (2,)))
         funcs.append(_function(f"jac__{pt.name}", "q", uq, eqs.point_jacobians[pt.name], (2, m)))
@@ -111,7 +129,7 @@ def generate_source(b: MechanismBuilder, eqs: SymbolicEquations) -> str:
         "def bind(p):",
         "    " + (", ".join(f"p_{k}" for k in params) + ("," if len(params) == 1 else "") + " = p" if params else "pass"),
     ]
-    footer = "    return {" + ", ".join(f"{n!r}: {n}" for n in names) + "}\n"
+    footer = "    return {" + ", ".join(f"{n!r}: {function_name(n)}" for n in names) + "}\n"
     return "\n".join(header) + "\n" + "\n".join(funcs) + "\n" + footer
 
 
@@ -144,24 +162,14 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
     f = module.bind(p)
     subs = {getattr(b.p, k): float(v) for k, v in b.values.items()}
 
-    point_loads = list(b.point_loads)
-    torque_loads = list(b.torque_loads)
     velocity_terms, potential_gradient = f["velocity_terms"], f["potential_gradient"]
-
-    n_ind = [len(load.indicator_names) if load.indicators else 0 for load in point_loads]
-    offsets = np.concatenate([[0], np.cumsum(n_ind)]).astype(int)
+    load_functions = {name: f[f"load__{name}"] for name in [ld.name for ld in b.point_loads + b.torque_loads]}
+    live_indicators = f["indicators"]
 
     def applied_forces(t, q, qd, mode=None):
-        out = {}
-        for k, load in enumerate(point_loads):
-            jac = f[f"jac__{load.point.name}"](q)
-            sub = None if mode is None or not n_ind[k] else tuple(mode[offsets[k]:offsets[k + 1]])
-            force = np.asarray(load.law(t, f[f"pos__{load.point.name}"](q), jac @ qd, sub), dtype=float)
-            out[load.name] = jac.T @ force
-        for load in torque_loads:
-            ja = f[f"angle_jac__{load.body.name}"](q)
-            out[load.name] = ja * load.law(t, f[f"angle__{load.body.name}"](q), float(ja @ qd))
-        return out
+        if mode is None:  # no frozen mode: the live signs of the switching functions
+            mode = tuple(1 if g >= 0 else -1 for g in live_indicators(t, q, qd))
+        return {name: fn(t, q, qd, mode) for name, fn in load_functions.items()}
 
     def forces(t, q, qd, mode=None):
         total = -velocity_terms(q, qd) - potential_gradient(q)
@@ -169,18 +177,8 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
             total += gen
         return total
 
-    indicators = None
-    indicator_names: tuple[str, ...] = ()
-    if any(n_ind):
-        indicator_names = tuple(n for load in point_loads if load.indicators for n in load.indicator_names)
-
-        def indicators(t, q, qd):
-            values = []
-            for load in point_loads:
-                if load.indicators:
-                    jac = f[f"jac__{load.point.name}"](q)
-                    values.extend(load.indicators(t, f[f"pos__{load.point.name}"](q), jac @ qd))
-            return np.asarray(values, dtype=float)
+    indicators = live_indicators if b.switches else None
+    indicator_names = tuple(name for name, _, _ in b.switches)
 
     contacts = []
     for c in b.contacts:
@@ -214,4 +212,5 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
         indicator_names=indicator_names,
         parameter_hash=parameter_hash,
         points={pt.name: f[f"pos__{pt.name}"] for pt in b.points},
+        kinematics=f,
     )

@@ -8,7 +8,8 @@ centre of mass r_i(q) and angle theta_i(q):
     V = sum_i m_i g y_i + sum of spring potentials
     gamma = -(Phi_q qd)_q qd
 
-so that M qdd + C qd + dV/dq + Phi_q^T lambda = Q_applied.
+so that M qdd + C qd + dV/dq + Phi_q^T lambda = Q_applied, with Q_applied the sum of the loads'
+generalized forces J_p^T f (a force f at point p) and j_i^T tau (a torque on body i).
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ class SymbolicEquations:
     point_jacobians: dict[str, sp.Matrix]       # (2, m)
     point_bias: dict[str, sp.Matrix]            # (2, 1)  Jdot qd
     angle_jacobians: dict[str, sp.Matrix]       # (1, m)  per body
+    loads: dict[str, sp.Matrix]                 # (m, 1)  generalized force of every applied load
+    indicators: sp.Matrix                       # (k, 1)  switching functions of the loads
 
 
 def _bias(jac: sp.Matrix, q: sp.Matrix, qd: sp.Matrix) -> sp.Matrix:
@@ -69,6 +72,12 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         positions[pt.name] = r
         jacobians[pt.name] = r.jacobian(q)
         bias[pt.name] = _bias(jacobians[pt.name], q, qd)
+    loads = {}
+    for load in b.point_loads:
+        loads[load.name] = jacobians[load.point.name].T * sp.Matrix(load.components)
+    for load in b.torque_loads:
+        loads[load.name] = angle_jacobians[load.body.name].T * load.torque
+    indicators = sp.Matrix([e for _, e, _ in b.switches]) if b.switches else sp.zeros(0, 1)
     return SymbolicEquations(
         mass=mass,
         velocity_terms=vel,
@@ -81,4 +90,6 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         point_jacobians=jacobians,
         point_bias=bias,
         angle_jacobians=angle_jacobians,
+        loads=loads,
+        indicators=indicators,
     )

@@ -82,6 +82,12 @@ class EquationsOfMotion:
         Potential of the conservative loads included in ``forces`` (gravity, springs).
     applied_forces : callable (t, q, qd[, mode]) -> dict[str, (m,)], optional
         Generalized force of every non-conservative applied load, by name (their work is tracked).
+    points : mapping name -> callable (q) -> (2,), optional
+        Positions of named points (generated equations: ``<body>.<point>`` and ``<body>.com``).
+    kinematics : mapping name -> callable, optional
+        The generated equations' kinematic functions: ``pos__<point>`` (q) -> (2,), ``jac__<point>``
+        (q) -> (2, m), ``bias__<point>`` (q, qd) -> (2,) (= Jdot qd), ``angle__<body>``,
+        ``angle_jac__<body>``, ``angle_bias__<body>``.
     indicators : callable (t, q, qd) -> (k,), optional
         Switching functions of discontinuous loads. Between two zero crossings the loads use a
         frozen ``mode`` (tuple of +-1, the indicators' signs), so an integrator can locate switches.
@@ -104,6 +110,7 @@ class EquationsOfMotion:
     indicator_names: tuple[str, ...] = ()
     parameter_hash: str = ""
     points: Mapping[str, Callable[[Array], Array]] = field(default_factory=dict)
+    kinematics: Mapping[str, Callable[..., Array]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         m, r = self.n_coordinates, self.n_constraints

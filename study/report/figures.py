@@ -21,6 +21,7 @@ from matplotlib.ticker import NullFormatter
 from PIL import Image
 from matplotlib.figure import Figure
 
+from study import mechanisms
 from study.results import SimulationResult
 
 DPI = 110
@@ -41,11 +42,7 @@ STYLE = {
     "path.simplify": True,
 }
 
-# Units of the saved quantities, by mechanism. Results do not record units; these follow the
-# mechanism modules' docstrings (quick-return: q = crank, rocker and rod angles; both constraints
-# are distances: the normal gap of A to the rocker line and the height of D above the ram guide).
-COORDINATE_UNITS = {"quick_return": "rad"}
-CONSTRAINT_UNITS = {"quick_return": "m"}
+# Units of the saved quantities come from the mechanism's description (results do not record them).
 
 # Stable colours per method so a method looks the same in every figure.
 _FIXED_STYLES = {
@@ -131,7 +128,7 @@ def constraint_violation_figure(runs: Mapping[str, SimulationResult], setting: s
     if not runs:
         raise ValueError(f"no runs to plot for setting {setting!r}")
     first = next(iter(runs.values()))
-    unit = CONSTRAINT_UNITS.get(first.meta.get("mechanism"), "")
+    unit = mechanisms.constraint_unit(first.meta["mechanism"]) if "mechanism" in first.meta else ""
     symbol = r"\Phi" if quantity == "phi" else r"\dot{\Phi}"
     unit_text = (unit if quantity == "phi" else f"{unit}/s") if unit else "as saved"
     with _style():
@@ -157,7 +154,7 @@ def trajectories_figure(reference: SimulationResult, runs: Mapping[str, Simulati
     """Top row: each coordinate of the reference run against time. Bottom row: |q_i - q_i,ref| of
     every run in ``runs`` (method name -> result, one integrator setting) on a log axis."""
     names = reference.meta.get("coordinate_names") or [f"q{i + 1}" for i in range(reference.q.shape[1])]
-    unit = COORDINATE_UNITS.get(reference.meta.get("mechanism"), "")
+    unit = mechanisms.coordinate_unit(reference.meta["mechanism"]) if "mechanism" in reference.meta else ""
     unit_text = f" [{unit}]" if unit else ""
     m = len(names)
     with _style():

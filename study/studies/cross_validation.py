@@ -28,9 +28,10 @@ The friction force compared is the whole tangential force of the guide: the in-h
 ``friction_<contact>`` already contains the resistance F (slider-crank), Exudyn records the Coulomb
 part and the resistance separately (``friction_guide`` + ``resistance_guide``).
 
-In-house revolute-joint reactions are not multipliers (the in-house coordinates eliminate those
-joints); :func:`inhouse_joint_forces` recovers them from the in-house q, qd, qdd and lambda by the
-bodies' Newton equations, taken from the distal end of each chain inwards.
+In-house tree-joint reactions are not multipliers (the relative coordinates eliminate those joints);
+:func:`inhouse_joint_forces` gets every joint's reaction from the description's absolute-coordinate
+equations (:mod:`study.reactions`). Which forces are compared (the contact, the joints) comes from
+the mechanism's description; nothing here names a mechanism.
 """
 
 from __future__ import annotations
@@ -42,17 +43,14 @@ import numpy as np
 import pandas as pd
 
 from study.compare import common_samples, observed_orders
+from study import mechanisms
 from study.params import load_parameters
 from study.pipeline import Case
+from study.reactions import joint_reactions
 from study.results import SimulationResult
 
 Array = np.ndarray
 
-#: Name of the guide's tangential and normal force per mechanism (the same in both engines).
-FRICTION_FORCE = {"slider_crank": "friction_guide", "quick_return": "friction_ram_guide"}
-NORMAL_FORCE = {"slider_crank": "normal_guide", "quick_return": "normal_ram_guide"}
-#: Revolute joints of the Exudyn models (joint -> distal body), as in study.exudyn_models.
-REVOLUTE_JOINTS = {"slider_crank": ("O", "A", "B"), "quick_return": ("O", "P", "A", "E", "D")}
 ROLES = ("reference", "exudyn", "inhouse")
 
 AGREEMENT_KEYS = ["mechanism", "variant", "friction", "t_end", "engine", "solver", "h"]
@@ -61,105 +59,38 @@ AGREEMENT_KEYS = ["mechanism", "variant", "friction", "t_end", "engine", "solver
 # --------------------------------------------------------------------------------------------
 # quantities compared
 # --------------------------------------------------------------------------------------------
+def contact_name(result: SimulationResult) -> str | None:
+    """The first sliding contact of the result's mechanism (its description), or None."""
+    ps = load_parameters(result.meta["mechanism"], result.meta["variant"])
+    contacts = mechanisms.description(ps).contacts()
+    return contacts[0].name if contacts else None
+
+
 def tangential_force(result: SimulationResult) -> Array | None:
     """The guide's whole tangential force on the sliding body [N] (None without friction)."""
-    mech = result.meta["mechanism"]
-    name = FRICTION_FORCE[mech]
-    if name not in result.forces:
+    name = contact_name(result)
+    if name is None or f"friction_{name}" not in result.forces:
         return None
-    total = np.asarray(result.forces[name], dtype=float)
-    if result.meta.get("engine") == "exudyn" and "resistance_guide" in result.forces:
-        total = total + result.forces["resistance_guide"]
+    total = np.asarray(result.forces[f"friction_{name}"], dtype=float)
+    if result.meta.get("engine") == "exudyn" and f"resistance_{name}" in result.forces:
+        total = total + result.forces[f"resistance_{name}"]
     return total
 
 
-def normal_force(result: SimulationResult) -> Array:
-    """The guide's normal force (the in-house sign convention, -lambda of the contact row) [N]."""
-    mech = result.meta["mechanism"]
-    name = NORMAL_FORCE[mech]
-    if name in result.forces:
-        return np.asarray(result.forces[name], dtype=float)
-    row = -1 if mech == "quick_return" else 0            # the contact's constraint row
+def normal_force(result: SimulationResult) -> Array | None:
+    """The guide's normal force (-lambda of the contact row) [N]; None without a contact."""
+    name = contact_name(result)
+    if name is None:
+        return None
+    if f"normal_{name}" in result.forces:
+        return np.asarray(result.forces[f"normal_{name}"], dtype=float)
+    row = list(result.meta["constraint_names"]).index(name)
     return -np.asarray(result.lam[:, row], dtype=float)
 
 
-def _e(a: Array) -> Array:
-    return np.stack([np.cos(a), np.sin(a)], axis=-1)
-
-
-def _n(a: Array) -> Array:
-    return np.stack([-np.sin(a), np.cos(a)], axis=-1)
-
-
-def _acc(r: float, a: Array, w: Array, al: Array) -> Array:
-    """Acceleration of r e(a): r (al n(a) - w^2 e(a)), shape (N, 2)."""
-    return r * (al[:, None] * _n(a) - (w ** 2)[:, None] * _e(a))
-
-
 def inhouse_joint_forces(result: SimulationResult) -> dict[str, Array]:
-    """Revolute-joint reactions of an in-house result, in the Exudyn models' convention.
-
-    ``joint_<J>_x/_y``: global force of joint J on its distal body [N], from Newton's second law of
-    each body with the in-house accelerations and multipliers (lambda: guide and block normal
-    forces; see the mechanism modules for the sign of each row), the applied loads (gravity,
-    cutting force, the guide's tangential force) and the parameter set of the result.
-
-    Parameters
-    ----------
-    result : SimulationResult of the in-house solver (meta 'mechanism', 'variant')
-
-    Returns
-    -------
-    dict name -> (N,) array
-    """
-    mech, variant = result.meta["mechanism"], result.meta["variant"]
-    v = load_parameters(mech, variant).values
-    q, qd, qdd, lam = result.q, result.qd, result.qdd, result.lam
-    n = len(result.t)
-    gravity = lambda m: np.tile([0.0, -m * v.g], (n, 1))   # noqa: E731 - weight of a body
-    tangential = tangential_force(result)
-    ft = np.zeros(n) if tangential is None else tangential
-    out = {}
-    if mech == "slider_crank":
-        q1, w1, a1 = q[:, 0], qd[:, 0], qdd[:, 0]
-        ph, wph, aph = q[:, 0] + q[:, 1], qd[:, 0] + qd[:, 1], qdd[:, 0] + qdd[:, 1]
-        acc_a = _acc(v.l1, q1, w1, a1)
-        acc_c2 = acc_a - _acc(v.c2, ph, wph, aph)
-        acc_b = acc_a - _acc(v.l2, ph, wph, aph)
-        guide = np.column_stack([ft, -lam[:, 0]])           # guide on the slider: (F_t, N), N = -lam1
-        f_b = v.m3 * acc_b - guide - gravity(v.m3)          # rod on slider
-        f_a = v.m2 * acc_c2 + f_b - gravity(v.m2)           # crank on rod
-        f_o = f_a - gravity(v.m1)                           # ground on crank (COM at O: no acceleration)
-        forces = {"O": f_o, "A": f_a, "B": f_b}
-    elif mech == "quick_return":
-        from study.mechanisms.quick_return import cutting_law
-
-        q1, q2, q3 = q.T
-        w1, w2, w3 = qd.T
-        a1, a2, a3 = qdd.T
-        acc_a = _acc(v.l1, q1, w1, a1)
-        acc_c1 = _acc(v.a1, q1, w1, a1)
-        acc_c2 = _acc(v.a2, q2, w2, a2)
-        acc_e = _acc(v.l2, q2, w2, a2)
-        acc_c3 = acc_e + _acc(v.a3, q3, w3, a3)
-        acc_d = acc_e + _acc(v.l3, q3, w3, a3)
-        law = cutting_law(load_parameters(mech, variant))
-        pos_d = np.column_stack([v.l2 * np.cos(q2) + v.l3 * np.cos(q3), v.l2 * np.sin(q2) + v.l3 * np.sin(q3)])
-        vel_d = v.l2 * w2[:, None] * _n(q2) + v.l3 * w3[:, None] * _n(q3)
-        cut = np.array([law(t, r, w, None)[0] for t, r, w in zip(result.t, pos_d, vel_d)])
-        ram_guide = np.column_stack([cut + ft, lam[:, 1]])  # guide pushes the ram with (0, lam2)
-        f_d = v.m5 * acc_d - ram_guide - gravity(v.m5)      # rod on ram
-        f_e = v.m3 * acc_c3 + f_d - gravity(v.m3)           # rocker on rod
-        rocker_on_block = -lam[:, [0]] * _n(q2)             # rocker pushes the block with -lam1 n
-        f_a = v.m4 * acc_a - rocker_on_block - gravity(v.m4)  # crank on block
-        f_o = v.m1 * acc_c1 + f_a - gravity(v.m1)           # ground on crank
-        f_p = v.m2 * acc_c2 + f_e + rocker_on_block - gravity(v.m2)  # ground on rocker
-        forces = {"O": f_o, "P": f_p, "A": f_a, "E": f_e, "D": f_d}
-    else:
-        raise ValueError(f"unknown mechanism {mech!r}; valid choices: slider_crank, quick_return")
-    for joint, f in forces.items():
-        out[f"joint_{joint}_x"], out[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
-    return out
+    """Every joint's reaction of an in-house result (:func:`study.reactions.joint_reactions`)."""
+    return joint_reactions(load_parameters(result.meta["mechanism"], result.meta["variant"]), result)
 
 
 def deviations(run: SimulationResult, ref: SimulationResult) -> dict[str, float]:
@@ -169,13 +100,14 @@ def deviations(run: SimulationResult, ref: SimulationResult) -> dict[str, float]
         "max_abs_dq": float(np.abs(run.q[ia] - ref.q[ib]).max()),
         "max_abs_dqd": float(np.abs(run.qd[ia] - ref.qd[ib]).max()),
         "max_abs_dlam": float(np.abs(run.lam[ia] - ref.lam[ib]).max()),
-        "max_abs_dN": float(np.abs(normal_force(run)[ia] - normal_force(ref)[ib]).max()),
     }
+    nr, nf = normal_force(run), normal_force(ref)
+    out["max_abs_dN"] = float(np.abs(nr[ia] - nf[ib]).max()) if nr is not None else float("nan")
     fr, ff = tangential_force(run), tangential_force(ref)
     out["max_abs_dF_friction"] = float(np.abs(fr[ia] - ff[ib]).max()) if fr is not None and ff is not None \
         else float("nan")
     out["max_abs_F_friction_ref"] = float(np.abs(ff[ib]).max()) if ff is not None else float("nan")
-    out["max_abs_N_ref"] = float(np.abs(normal_force(ref)[ib]).max())
+    out["max_abs_N_ref"] = float(np.abs(nf[ib]).max()) if nf is not None else float("nan")
     out["n_samples"] = int(len(ia))
     return out
 
@@ -194,6 +126,8 @@ def reaction_deviations(run: SimulationResult, ref: SimulationResult,
         out[f"lam{i + 1}"] = (float(np.abs(run.lam[ia, i] - ref.lam[ib, i]).max()),
                               float(np.abs(ref.lam[ib, i]).max()))
     for name in sorted(ref_joints):
+        if name.endswith("_moment"):  # Exudyn's PrismaticJoint2D outputs no constraint torque
+            continue
         out[name] = (float(np.abs(run.forces[name][ia] - ref_joints[name][ib]).max()),
                      float(np.abs(ref_joints[name][ib]).max()))
     return out

@@ -58,7 +58,7 @@ import numpy as np
 import pandas as pd
 
 from study.compare import common_samples, max_deviation
-from study.params import SliderCrankParameters, load_parameters
+from study.params import load_parameters
 from study.pipeline import Case, find, find_one
 from study.results import SimulationResult
 
@@ -81,7 +81,7 @@ class PaperSolution:
     consistent: bool
 
 
-def _paper_terms(v: SliderCrankParameters, q, qd):
+def _paper_terms(v, q, qd):
     q1, q2 = float(q[0]), float(q[1])
     w1, w2 = float(qd[0]), float(qd[1])
     th, wth = q1 + q2, w1 + w2
@@ -106,7 +106,7 @@ def _paper_terms(v: SliderCrankParameters, q, qd):
                 D=np.array([1.0, d12]))
 
 
-def paper_method(v: SliderCrankParameters, q, qd, s: float, sigma: float) -> PaperSolution:
+def paper_method(v, q, qd, s: float, sigma: float) -> PaperSolution:
     """000's method for the slider-crank (eqs. 24-34, corrected), one sign hypothesis.
 
     Unknowns qdd1, qdd2 and N, from three equations linear in them once s = sgn(x_B') and
@@ -121,7 +121,7 @@ def paper_method(v: SliderCrankParameters, q, qd, s: float, sigma: float) -> Pap
 
     Parameters
     ----------
-    v : SliderCrankParameters
+    v : the slider-crank parameter values (``ps.values``)
     q, qd : (2,) state on the constraint manifold
     s : sliding direction, +-1 (0: no friction or resistance)
     sigma : assumed sign of N, +-1
@@ -162,7 +162,7 @@ def paper_method(v: SliderCrankParameters, q, qd, s: float, sigma: float) -> Pap
     return PaperSolution(x[:2], N, float(-s * (v.F + v.mu * sigma * N)), bool(sigma * N >= 0))
 
 
-def paper_method_consistent(v: SliderCrankParameters, q, qd, s: float) -> PaperSolution:
+def paper_method_consistent(v, q, qd, s: float) -> PaperSolution:
     """The consistent sign hypothesis of :func:`paper_method` (exactly one expected; else ValueError)."""
     sols = [paper_method(v, q, qd, s, sigma) for sigma in (1.0, -1.0)]
     good = [p for p in sols if p.consistent]
@@ -171,7 +171,7 @@ def paper_method_consistent(v: SliderCrankParameters, q, qd, s: float) -> PaperS
     return good[0]
 
 
-def holding_forces(v: SliderCrankParameters, q) -> dict[str, float]:
+def holding_forces(v, q) -> dict[str, float]:
     """Static balance of the stuck mechanism at q (qd = 0), from 000's D = [1, d12].
 
     Each load's generalized force along the motion, R^T Q with R = [1, d12]^T, is a torque about
@@ -189,7 +189,7 @@ def holding_forces(v: SliderCrankParameters, q) -> dict[str, float]:
             "lever_dxB_dq1": lever, "f_required": f_req}
 
 
-def breakaway_torque(v: SliderCrankParameters, q) -> dict[str, float]:
+def breakaway_torque(v, q) -> dict[str, float]:
     """Drive torque M at which the mechanism, stuck at q (qd = 0), breaks away from the guide.
 
     The holding force is affine in M, f_req = -(M + T_other) / lever (:func:`holding_forces`), and at
@@ -217,13 +217,13 @@ def breakaway_torque(v: SliderCrankParameters, q) -> dict[str, float]:
     return {"breakaway_M": float("nan"), "breakaway_f": float("nan"), "breakaway_normal": float("nan")}
 
 
-def slider_position(v: SliderCrankParameters, q: Array) -> Array:
+def slider_position(v, q: Array) -> Array:
     """x_B = l1 cos q1 - l2 cos(q1 + q2) [m] for (N, 2) samples q."""
     q = np.atleast_2d(q)
     return v.l1 * np.cos(q[:, 0]) - v.l2 * np.cos(q[:, 0] + q[:, 1])
 
 
-def slider_velocity(v: SliderCrankParameters, q: Array, qd: Array) -> Array:
+def slider_velocity(v, q: Array, qd: Array) -> Array:
     """x_B' = -l1 sin q1 q1' + l2 sin(q1 + q2) (q1' + q2') [m/s] for (N, 2) samples q, qd."""
     q, qd = np.atleast_2d(q), np.atleast_2d(qd)
     th = q[:, 0] + q[:, 1]

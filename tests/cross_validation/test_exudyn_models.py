@@ -1,5 +1,6 @@
-"""The independent Exudyn models: constraints, reactions at t = 0, convergence order, explicit
-solvers, and the guarded reaction reading of the friction user function.
+"""The Exudyn models generated from the descriptions (study.exudyn_models.translate): constraints,
+reactions at t = 0, convergence order, explicit solvers, and the guarded reaction reading of the
+friction user function.
 
 Every tolerance comes from ``reference/cross_validation.toml`` (with its reason). Quantities of the
 in-house side (Phi, the multipliers at t = 0) are computed here from the in-house equations.
@@ -13,16 +14,15 @@ import numpy as np
 import pytest
 
 from study import mechanisms
-from study.exudyn_models import ExudynModelError, common
-from study.exudyn_models import quick_return as xqr
-from study.exudyn_models import slider_crank as xsc
-from study.params import available_variants, load_parameters
+from study.exudyn_models import ExudynModelError, common, initial_accelerations, run
+from study.exudyn_models.translate import build
+from study.params import available_mechanisms, available_variants, load_parameters
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import Multiplier
 
-MODELS = {"slider_crank": xsc, "quick_return": xqr}
-CASES = [(name, variant) for name in MODELS for variant in available_variants(name)]
+MECHANISMS = tuple(available_mechanisms())
+CASES = [(name, variant) for name in MECHANISMS for variant in available_variants(name)]
 
 
 def tol(key: str) -> float:
@@ -48,13 +48,13 @@ def gamma_share(eom, q, qd):
 
 
 # ---------------------------------------------------------------------------------------------
-# (a) both models run; index 3 keeps the in-house Phi at round-off
+# (a) every model runs; index 3 keeps the in-house Phi at round-off
 # ---------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("name,variant", CASES)
 def test_index3_keeps_inhouse_phi_at_round_off(name, variant):
     ps, eom = mechanisms.load(name, variant)
     state = mechanisms.initial_state(ps, eom)
-    r = MODELS[name].run(ps, 0.5, 1e-3)
+    r = run(ps, 0.5, 1e-3)
     assert isinstance(r, SimulationResult)
     assert r.t.shape == (501,) and r.t[-1] == pytest.approx(0.5)
     assert r.q.shape == (501, eom.n_coordinates) and r.lam.shape == (501, eom.n_constraints)
@@ -71,7 +71,7 @@ def test_index3_keeps_inhouse_phi_at_round_off(name, variant):
 def test_index2_drift_is_not_round_off_and_shrinks_at_order_two():
     """Index 2 enforces velocity constraints only: Phi drifts, by O(h^2)."""
     ps = load_parameters("quick_return", "smooth_cutting")
-    drift = [np.abs(xqr.run(ps, 0.24, h, solver="index2").phi).max() for h in (1e-3, 5e-4, 2.5e-4)]
+    drift = [np.abs(run(ps, 0.24, h, solver="index2").phi).max() for h in (1e-3, 5e-4, 2.5e-4)]
     assert min(drift) > 1e3 * tol("phi_roundoff"), drift
     p = observed_orders(drift)
     assert np.all(np.abs(p - tol("index2_drift_order")) <= tol("order_band")), f"drift {drift}, orders {p}"
@@ -79,8 +79,8 @@ def test_index2_drift_is_not_round_off_and_shrinks_at_order_two():
 
 def test_output_step_samples_the_step_grid():
     ps = load_parameters("slider_crank", "sustained_sliding")
-    every = xsc.run(ps, 0.1, 1e-3)
-    sampled = xsc.run(ps, 0.1, 1e-3, output_step=0.01)
+    every = run(ps, 0.1, 1e-3)
+    sampled = run(ps, 0.1, 1e-3, output_step=0.01)
     np.testing.assert_allclose(sampled.t, np.linspace(0.0, 0.1, 11), rtol=0, atol=1e-15)
     for key in ("q", "qd", "qdd", "lam", "phi"):
         np.testing.assert_array_equal(getattr(sampled, key), getattr(every, key)[::10])
@@ -101,15 +101,13 @@ def test_bad_arguments_raise_value_error(kwargs, message):
     ps = load_parameters("slider_crank", "seed")
     args = dict(t_end=0.01, h=1e-3) | kwargs
     with pytest.raises(ValueError, match=re.escape(message)):
-        xsc.run(ps, **args)
-    with pytest.raises(ValueError, match="not 'quick_return'"):
-        xqr.run(ps, 0.01, 1e-3)
+        run(ps, **args)
 
 
 def test_no_solution_folder_is_written(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    xqr.run(load_parameters("quick_return", "guide_friction"), 0.01, 1e-3)
-    xsc.run(load_parameters("slider_crank", "seed"), 0.01, 1e-3, solver="index2")
+    run(load_parameters("quick_return", "guide_friction"), 0.01, 1e-3)
+    run(load_parameters("slider_crank", "seed"), 0.01, 1e-3, solver="index2")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -127,11 +125,11 @@ def test_initial_reactions_match_inhouse_multipliers_quick_return():
     s = mechanisms.initial_state(ps, eom)
     _, lam = inhouse_multipliers(eom, 0.0, s.q, s.qd)
     bound = tol("reaction_velocity_term_relative") * np.abs(gamma_share(eom, s.q, s.qd))
-    r = xqr.run(ps, 0.01, 1e-3)
-    exudyn_normal = np.array([r.forces["normal_block_on_rocker"][0], r.forces["normal_ram_guide"][0]])
+    r = run(ps, 0.01, 1e-3)
+    exudyn_normal = np.array([r.forces["joint_block_on_rocker_n"][0], r.forces["normal_ram_guide"][0]])
     assert np.all(np.abs(r.lam[0] - lam) <= bound), f"Exudyn {r.lam[0]}, in-house {lam}, bound {bound}"
     assert np.all(np.abs(exudyn_normal - (-lam)) <= bound)
-    qdd0, lam0 = xqr.initial_accelerations(ps, s.q, s.qd)     # the same solve, without stepping
+    qdd0, lam0 = initial_accelerations(ps, s.q, s.qd)     # the same solve, without stepping
     np.testing.assert_array_equal(lam0, r.lam[0])
     np.testing.assert_array_equal(qdd0, r.qdd[0])
 
@@ -140,6 +138,7 @@ def test_initial_reactions_match_inhouse_multipliers_quick_return():
     ("quick_return", "smooth_cutting", {}),
     ("quick_return", "seed", {}),
     ("slider_crank", "seed", dict(friction="none")),
+    ("four_bar", "seed", {}),
 ])
 def test_initial_reactions_at_zero_velocity_agree_to_round_off(name, variant, kwargs):
     """Without velocity terms both codes solve the same linear system: only round-off remains."""
@@ -147,10 +146,32 @@ def test_initial_reactions_at_zero_velocity_agree_to_round_off(name, variant, kw
     q = mechanisms.initial_state(ps, eom).q
     qd = np.zeros_like(q)
     qdd, lam = inhouse_multipliers(eom, 0.0, q, qd)
-    qdd_x, lam_x = MODELS[name].initial_accelerations(ps, q, qd, **kwargs)
+    qdd_x, lam_x = initial_accelerations(ps, q, qd, **kwargs)
     rel = tol("reaction_zero_velocity_relative")
     np.testing.assert_allclose(lam_x, lam, rtol=rel, atol=0)
     np.testing.assert_allclose(qdd_x, qdd, rtol=0, atol=rel * np.abs(qdd).max())
+
+
+@pytest.mark.parametrize("name,variant,kwargs", [
+    ("quick_return", "smooth_cutting", {}),
+    ("slider_crank", "sustained_sliding", dict(friction="none")),
+    ("four_bar", "seed", {}),
+])
+def test_initial_accelerations_and_multipliers_match_inhouse(name, variant, kwargs):
+    """Every mechanism at its consistent initial state (velocities on, frictionless): Exudyn's
+    initial-acceleration solve against the in-house saddle-point solve. Only Exudyn's numerically
+    differentiated velocity term separates them (reaction_velocity_term_relative, taken relative to
+    the part of lambda and of qdd that the velocity term gamma produces)."""
+    ps, eom = mechanisms.load(name, variant)
+    s = mechanisms.initial_state(ps, eom)
+    qdd, lam = inhouse_multipliers(eom, 0.0, s.q, s.qd)
+    qdd_g, lam_g = Multiplier().solve(eom.mass(s.q), np.zeros(eom.n_coordinates), eom.phi_q(s.q),
+                                      eom.gamma(s.q, s.qd))
+    qdd_x, lam_x = initial_accelerations(ps, s.q, s.qd, **kwargs)
+    rel, vel = tol("reaction_zero_velocity_relative"), tol("reaction_velocity_term_relative")
+    assert np.all(np.abs(lam_x - lam) <= rel * np.abs(lam) + vel * np.abs(lam_g)), f"Exudyn {lam_x}, in-house {lam}"
+    bound = rel * np.abs(qdd).max() + vel * np.abs(qdd_g).max()
+    assert np.abs(qdd_x - qdd).max() <= bound, f"Exudyn {qdd_x}, in-house {qdd}"
 
 
 def test_initial_state_with_friction_slider_crank():
@@ -165,7 +186,7 @@ def test_initial_state_with_friction_slider_crank():
     for _ in range(50):
         f_t = -(contact.resistance + contact.mu_kinetic * abs(lam[0])) * np.tanh(v_b / eps)
         qdd, lam = inhouse_multipliers(eom, 0.0, s.q, s.qd, jt * f_t)
-    r = xsc.run(ps, 0.01, 1e-3)
+    r = run(ps, 0.01, 1e-3)
     bound = tol("reaction_zero_velocity_relative") * np.abs(lam) + \
         tol("reaction_velocity_term_relative") * np.abs(gamma_share(eom, s.q, s.qd))
     assert np.all(np.abs(r.lam[0] - lam) <= bound), f"Exudyn {r.lam[0]}, in-house {lam}"
@@ -178,10 +199,10 @@ def test_initial_state_with_friction_slider_crank():
 # (c) convergence order of the smooth quick-return
 # ---------------------------------------------------------------------------------------------
 def _errors(ps, t_end, steps, h_ref, output_step):
-    ref = xqr.run(ps, t_end, h_ref, output_step=output_step)
+    ref = run(ps, t_end, h_ref, output_step=output_step)
     eq, ev = [], []
     for h in steps:
-        r = xqr.run(ps, t_end, h, output_step=output_step)
+        r = run(ps, t_end, h, output_step=output_step)
         eq.append(np.abs(r.q - ref.q).max())
         ev.append(np.abs(r.qd - ref.qd).max())
     return eq, ev
@@ -217,16 +238,16 @@ def test_convergence_order_documented_unresolved_switch():
 # ---------------------------------------------------------------------------------------------
 # (d) Exudyn's explicit solvers refuse the constrained models
 # ---------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize("name", MECHANISMS)
 @pytest.mark.parametrize("solver", common.EXPLICIT_SOLVERS)
 def test_explicit_solvers_refuse_joint_constraints(name, solver):
     ps, eom = mechanisms.load(name, "seed")
     s = mechanisms.initial_state(ps, eom)
     with pytest.raises(ExudynModelError, match=r"^SolverExplicit: explicit integrator detected object (\d+) which "
                                                r"contains constraints that cannot be solved; aborting solver") as exc:
-        MODELS[name].run(ps, 0.01, 1e-3, solver=solver)
-    model, _ = MODELS[name].build(ps, s.q, s.qd)
-    first_joint = int(model.joints["O"][0])     # the first constraint object in the system
+        run(ps, 0.01, 1e-3, solver=solver)
+    built = build(ps, s.q, s.qd)
+    first_joint = int(built.model.joints[built.d.joints[0].name][0])   # the first constraint object
     assert int(re.search(r"object (\d+)", str(exc.value)).group(1)) == first_joint
 
 
@@ -241,7 +262,7 @@ def test_slider_crank_friction_uses_converged_normal_force(variant):
     first iterate would give friction 0, a one-step lag a ~5e-5 relative error.
     """
     ps = load_parameters("slider_crank", variant)
-    r = xsc.run(ps, 0.5, 1e-3)
+    r = run(ps, 0.5, 1e-3)
     v = ps.values
     n = r.forces["normal_guide"]
     expected = v.mu * np.abs(n) * r.forces["resistance_guide"] / v.F
@@ -255,7 +276,7 @@ def test_slider_crank_friction_uses_converged_normal_force(variant):
 def test_quick_return_guide_friction_uses_converged_normal_force():
     ps = load_parameters("quick_return", "guide_friction")
     v = ps.values
-    r = xqr.run(ps, 0.5, 1e-3)
+    r = run(ps, 0.5, 1e-3)
     q, qd = r.q, r.qd
     v_d = -v.l2 * np.sin(q[:, 1]) * qd[:, 1] - v.l3 * np.sin(q[:, 2]) * qd[:, 2]
     limit = v.mu_guide * np.abs(r.forces["normal_ram_guide"])

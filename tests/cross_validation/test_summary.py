@@ -71,7 +71,8 @@ def test_summarize_tables(tiny):
     assert len(timing) == len(agree) and (timing.cpu_seconds > 0).all()
     react = tables["exudyn_reactions"]
     assert set(react.mechanism) == {"quick_return"}     # only frictionless sets
-    assert set(react.quantity) == {"lam1", "lam2"} | {f"joint_{j}_{c}" for j in "OPAED" for c in "xy"}
+    assert set(react.quantity) == {"lam1", "lam2", "joint_block_on_rocker_n", "joint_ram_guide_n"} \
+        | {f"joint_{j}_{c}" for j in "OPAED" for c in "xy"}
     np.testing.assert_allclose(react.relative, react.max_abs_diff / react.max_abs_inhouse, rtol=1e-15)
 
 
@@ -101,8 +102,10 @@ def test_case_list_covers_every_variant_and_matches_the_tolerance_table():
                 ("slider_crank", "slip_then_stick"): tol("friction_horizon_slip_then_stick"),
                 ("quick_return", "guide_friction"): tol("friction_horizon_guide_friction"),
                 ("quick_return", "smooth_cutting"): tol("order_horizon"),
-                ("quick_return", "seed"): tol("inhouse_reference_horizon_on_off")}
-    steps = {"slider_crank": tol("slider_crank_friction_steps"), "quick_return": tol("quick_return_friction_steps")}
+                ("quick_return", "seed"): tol("inhouse_reference_horizon_on_off"),
+                ("four_bar", "seed"): tol("four_bar_horizon")}
+    steps = {"slider_crank": tol("slider_crank_friction_steps"), "quick_return": tol("quick_return_friction_steps"),
+             "four_bar": tol("four_bar_order_steps")}
     for case in cl.cases:
         key, role = xv.parse_group(case.group)
         o = case.kwargs

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from study import mechanisms
 from study.reference_data import tolerance
 from study.report import figures
 from study.report.context import ReportContext
@@ -20,11 +21,20 @@ from study.report.render import fmt_number, md_table
 from study.studies import cross_validation as xv
 
 STUDY = "cross_validation"
-# One set per mechanism for the time-series figures.
-TIME_SERIES_SETS = ("slider_crank/sustained_sliding", "quick_return/guide_friction")
-REACTION_SET = "quick_return/smooth_cutting"
 SOLVER_STYLE = {"index3": {"color": "tab:blue", "ls": "-"}, "index2": {"color": "tab:orange", "ls": "--"}}
-UNITS = {"slider_crank": "rad", "quick_return": "rad"}
+
+
+def _report_notes(ctx: ReportContext) -> str:
+    """The case list's [report] notes: documented limits that are tests rather than table rows."""
+    cl = ctx.case_lists.get(STUDY)
+    return str(cl.report.get("notes", "")) if cl is not None else ""
+
+
+def _report_choices(ctx: ReportContext) -> tuple[list[str], list[str]]:
+    """The sets drawn over time and the sets whose joint reactions are drawn (the case list's [report])."""
+    cl = ctx.case_lists.get(STUDY)
+    choices = cl.report if cl is not None else {}
+    return list(choices.get("time_series", [])), list(choices.get("reactions", []))
 # Orders further from 2 than the tests' order band are listed as disagreements; force deviations
 # below the index-3 round-off floor (a fraction of the largest force) are called round-off.
 ORDER_NOTE = tolerance("order_band", table="cross_validation")
@@ -35,7 +45,11 @@ ROUND_OFF_RELATIVE = tolerance("index3_reaction_floor_relative", table="cross_va
 
 
 def _mech(name: str) -> str:
-    return name.replace("_", "-")
+    return mechanisms.label(name)
+
+
+def _unit(mechanism: str) -> str:
+    return mechanisms.coordinate_unit(mechanism)
 
 
 def _set_cases(ctx: ReportContext, key: str) -> dict[str, list]:
@@ -86,8 +100,8 @@ def differences_figure(ref, runs, mechanism: str, variant: str) -> Figure:
                              label=f"Exudyn {solver}, h={h:g} s: {name}", **style)
                 axes[1].plot(ref.t[ib], _positive(np.abs(run.qd[ia, i] - ref.qd[ib, i])),
                              label=f"Exudyn {solver}, h={h:g} s: {name}", **style)
-        axes[0].set_ylabel(f"|q_i - q_i,ref| [{UNITS[mechanism]}]")
-        axes[1].set_ylabel(f"|q̇_i - q̇_i,ref| [{UNITS[mechanism]}/s]")
+        axes[0].set_ylabel(f"|q_i - q_i,ref| [{_unit(mechanism)}]")
+        axes[1].set_ylabel(f"|q̇_i - q̇_i,ref| [{_unit(mechanism)}/s]")
         axes[1].set_xlabel("time t [s]")
         for ax in axes:
             ax.set_yscale("log")
@@ -157,8 +171,9 @@ def convergence_figure(agree: pd.DataFrame) -> Figure:
     exu = agree[agree.engine == "exudyn"]
     with figures._style():
         fig = Figure(figsize=(10.0, 4.6))
-        axes = fig.subplots(1, 2, sharey=False)
-        for ax, mech in zip(axes, ("slider_crank", "quick_return")):
+        mechs = sorted(set(exu.mechanism)) or [""]
+        axes = np.atleast_1d(fig.subplots(1, len(mechs), sharey=False))
+        for ax, mech in zip(axes, mechs):
             sub = exu[exu.mechanism == mech]
             keys = sorted({(v, f) for v, f in zip(sub.variant, sub.friction)})
             colors = matplotlib_colors(len(keys))
@@ -244,8 +259,8 @@ def section(ctx: ReportContext) -> list[str]:
     timing = ctx.table("exudyn_agreement_timing")
     react = ctx.table("exudyn_reactions")
     lines += [
-        "Both mechanisms are built a second time in Exudyn (`study/exudyn_models`) from the same parameter "
-        "files, never from the in-house equations, and solved with fixed steps by generalized-alpha with "
+        "Every mechanism is built a second time in Exudyn by one translator (`study/exudyn_models`) from its "
+        "joint-level description and parameter file, never from the in-house equations, and solved with fixed steps by generalized-alpha with "
         "index-3 constraints (`index3`) and by Newmark/trapezoidal with index-2 constraints (`index2`). "
         "Friction is the regularized law −(F + μ|N|) tanh(v/ε) with the same ε on both sides, N read from "
         "Exudyn's joint reaction inside a user function. Each run is compared with an in-house high-accuracy "
@@ -260,20 +275,16 @@ def section(ctx: ReportContext) -> list[str]:
     lines += [md_table(header, _agreement_rows(agree, timing), [False] * 3 + [True] * 13), ""]
     lines += ["Observed orders (Exudyn, every variant):", ""] + _order_summary(agree) + [""]
     lines += ["Disagreements and limits (numbers from the tables):", ""] + _disagreements(agree, react) + [""]
-    lines += [
-        "Documented limits that are tests rather than table rows (`tests/cross_validation`, tolerances with "
-        "measured values in `reference/cross_validation.toml`): a steep regularization ε = 1e-5 makes "
-        "Exudyn's index-3 Newton iteration fail at the stick of `slip_then_stick` for h ≤ 1e-3 s (index 2 "
-        "keeps order 2), and the on/off cutting law of the quick-return is compared only before its first "
-        "switch, which Exudyn cannot locate within a step. Exact stick/slip is not modelled in Exudyn: "
-        "the regularized law is used on both sides.", "",
-    ]
+    notes = _report_notes(ctx)
+    if notes:
+        lines += [notes, ""]
     if (agree.engine == "exudyn").any():
         lines += [ctx.figure(convergence_figure(agree), "cross_validation_convergence",
                              "max|dq| of Exudyn vs step h, both solvers, all variants, slope-2 guide"), ""]
     else:
         lines += ["No Exudyn runs in `exudyn_agreement`: the convergence figure is not drawn.", ""]
-    for key in TIME_SERIES_SETS:
+    time_series, reaction_sets = _report_choices(ctx)
+    for key in time_series:
         loaded = _load_set(ctx, key)
         if loaded is None:
             lines += [f"Runs of `{key}` are missing; its figures are not drawn.", ""]
@@ -285,12 +296,15 @@ def section(ctx: ReportContext) -> list[str]:
                              f"{_mech(mech)} {variant}: |Exudyn - reference| over time"), ""]
         lines += [ctx.figure(forces_figure(ref, runs, mech, variant), f"cross_validation_{stem}_forces",
                              f"{_mech(mech)} {variant}: friction and normal force, Exudyn and in-house"), ""]
-    loaded = _load_set(ctx, REACTION_SET)
-    if loaded is not None:
+    for key in reaction_sets:
+        loaded = _load_set(ctx, key)
+        if loaded is None:
+            lines += [f"Runs of `{key}` are missing; its reaction figure is not drawn.", ""]
+            continue
         ref, runs = loaded
-        lines += [ctx.figure(reactions_figure(ref, runs, ref.meta["mechanism"], ref.meta["variant"]),
-                             "cross_validation_reactions",
-                             "frictionless quick-return: joint reactions, Exudyn and in-house"), ""]
+        stem = "cross_validation_reactions" + ("" if key == reaction_sets[0] else "_" + key.replace("/", "_"))
+        lines += [ctx.figure(reactions_figure(ref, runs, ref.meta["mechanism"], ref.meta["variant"]), stem,
+                             f"frictionless {_mech(ref.meta['mechanism'])}: joint reactions, Exudyn and in-house"), ""]
     if react is not None and len(react):
         finest = react.loc[react.groupby(["mechanism", "variant", "solver", "quantity"]).h.idxmin()]
         rows = [[_mech(r.mechanism), r.variant, r.solver, fmt_number(r.h), r.quantity, fmt_number(r.max_abs_diff),

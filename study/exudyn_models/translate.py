@@ -1,0 +1,551 @@
+"""The Exudyn model of any joint-level description (:class:`study.model.joints.Description`).
+
+No mechanism is named here: bodies, joints, loads, friction and the result mapping are all read from
+the description returned by :func:`study.mechanisms.description`.
+
+Model
+-----
+* Every body: NodeRigidBody2D at its centre of mass with mass and centroidal inertia, gravity -g
+  along y (LoadMassProportional). The node's reference configuration is the initial state (initial
+  displacements 0); its initial velocities are the consistent ones. The initial state comes from the
+  in-house consistent (q, qd) mapped through the description's kinematics (COM position from the
+  generated point function ``eom.points['<body>.com']``, angle from the description's angle
+  expression, rates from their Jacobians).
+* ``revolute(J, a, b)``: RevoluteJoint2D between MarkerBodyRigid markers at a (marker 0) and b
+  (marker 1); a ground point is a marker on the ground object.
+* ``prismatic(J, slider, guide, axis, normal)``: PrismaticJoint2D with marker 0 at the guide point,
+  ``axisMarker0`` = the description's axis (guide frame), marker 1 at the slider point,
+  ``normalMarker1`` = the normal expressed in the slider's frame at the initial configuration,
+  ``constrainRotation=True``.
+* Loads: a law without state, time or mode dependence (after binding the parameter values) is a
+  constant LoadTorqueVector / LoadForceVector (no Python in the loop); any other law is lambdified
+  once with the parameter values bound and evaluated in a load user function from Exudyn's own
+  kinematics: marker position / velocity of the input point, node angle = reference + displacement,
+  node angular velocity. A mode symbol is +1 if its switching function (evaluated live on the same
+  inputs) is >= 0, else -1: the law is evaluated without event location, as Exudyn cannot locate a
+  switch within a step.
+* Potentials (springs): user-function torques / forces = minus the gradient of the energy with
+  respect to the angle and point-position inputs; their energy is part of the result's potential.
+* Friction: a prismatic joint with :class:`~study.model.joints.Friction` data whose kinetic
+  coefficient or resistance is > 0 (guide fixed in ground) gets the regularized Coulomb law of
+  :class:`~study.exudyn_models.common.GuideFriction` along the guide's axis, with N read from the
+  joint through a :class:`~study.exudyn_models.common.ReactionGuard`; ``friction='none'`` leaves it out.
+
+Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
+---------------------------------------------------------------------------
+* q: the body angles are linear in q (checked), theta = A q + c; q = q0 + A^+ (theta - theta0) with
+  A^+ the exact pseudo-inverse and theta - theta0 Exudyn's angle displacement (so q(0) = q0 exactly);
+  qd, qdd = A^+ times the node angular velocities / accelerations (Exudyn's, not finite differences).
+* lam, in ``eom.constraint_names`` order: a revolute row ``<J>_x/_y`` is the row r_a - r_b, so lam =
+  the force of joint J on its second body b, global = -Exudyn 'Force' (the force on the marker-0
+  body a). A prismatic gap row ``<J>`` = n . (r_s - r_g): the guide pushes the slider with -lam n, so
+  lam = ForceLocal . n_local, ForceLocal = Exudyn's force on the marker-0 (guide) body in the
+  guide's body frame and n_local the normal in that frame.
+* forces: ``normal_<c>`` = -lam of contact c's row; ``friction_<c>`` (Coulomb part) and
+  ``resistance_<c>`` (if the description has a resistance) along the guide axis; ``<load>`` = the
+  torque, or the force along the guide axis of the loaded body's prismatic joint (else along global
+  x); ``joint_<J>_x/_y`` (every revolute joint) = force of J on its second body, global;
+  ``joint_<J>_n`` (every prismatic joint) = force on the slider along the joint's normal = -lam.
+* energies: kinetic, potential (gravity + springs), ``work_<load>`` and ``work_friction_<c>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from study import mechanisms
+from study.exudyn_models import common
+from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard
+from study.model.coordinates import poses
+from study.model.joints import GROUND, Description, Prismatic, Revolute
+from study.params import ParameterSet
+from study.results import SimulationResult
+
+Array = np.ndarray
+
+
+# --------------------------------------------------------------------------------------------
+# the description, its bound values and kinematics (one per parameter set)
+# --------------------------------------------------------------------------------------------
+@dataclass
+class Kinematics:
+    """Body angles and COM velocities of the relative coordinates, and the angle map's pseudo-inverse."""
+
+    d: Description
+    subs: dict
+    angle: dict           # body -> f(q) -> float
+    angle_grad: dict      # body -> f(q) -> (m,) gradient
+    com_jac: dict         # body -> f(q) -> (2, m)
+    pinv: Array           # (m, n_bodies): q - q0 = pinv @ (theta - theta0)
+
+
+_KINEMATICS: dict[str, Kinematics] = {}
+
+
+def _kinematics(ps: ParameterSet) -> Kinematics:
+    """The description of ``ps`` and its bound kinematics (cached by the parameter set's hash)."""
+    if ps.sha256 not in _KINEMATICS:
+        _KINEMATICS[ps.sha256] = _make_kinematics(ps)
+    return _KINEMATICS[ps.sha256]
+
+
+def _make_kinematics(ps: ParameterSet) -> Kinematics:
+    d = mechanisms.description(ps)
+    d.validate()
+    subs = {getattr(d.p, k): sp.Float(v) for k, v in d.values.items()}
+    q = list(d.q)
+    _, _, placed, _ = poses(d, "relative")
+    angle, grad, jac, rows = {}, {}, {}, []
+    for b in d.bodies:
+        r, th = placed[b]
+        th = sp.sympify(th).xreplace(subs)
+        g = sp.Matrix([th]).jacobian(q)
+        angle[b] = sp.lambdify([q], th, "math")
+        grad[b] = sp.lambdify([q], g, "numpy")
+        jac[b] = sp.lambdify([q], r.xreplace(subs).jacobian(q), "numpy")
+        rows.append(g)
+    a = sp.Matrix.vstack(*rows)
+    if a.free_symbols & set(q) or a.rank() != len(q):
+        raise ValueError(f"mechanism {d.name!r}: the Exudyn result needs body angles linear in q with full rank "
+                         f"(q recovered from the angles); angle Jacobian {a.tolist()}")
+    pinv = np.array(a.pinv().evalf(), dtype=float)
+    return Kinematics(d, subs, angle, grad, jac, pinv)
+
+
+def body_states(ps: ParameterSet, q, qd) -> dict[str, BodyState]:
+    """COM position, angle and their rates of every body at (q, qd) through the description's kinematics."""
+    k = _kinematics(ps)
+    eom = mechanisms.equations(ps)
+    q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+    out = {}
+    for b in k.d.bodies:
+        pos = np.asarray(eom.points[f"{b}.com"](q), dtype=float).ravel()
+        vel = np.asarray(k.com_jac[b](q), dtype=float) @ qd
+        omega = float(np.asarray(k.angle_grad[b](q), dtype=float).ravel() @ qd)
+        out[b] = BodyState((float(pos[0]), float(pos[1])), float(k.angle[b](q)), (float(vel[0]), float(vel[1])),
+                           omega)
+    return out
+
+
+def _rotation(a) -> Array:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s], [s, c]])
+
+
+# --------------------------------------------------------------------------------------------
+# load laws: lambdified once, evaluated from Exudyn's kinematics (live) or from its body series
+# --------------------------------------------------------------------------------------------
+class Law:
+    """Expressions in the description's inputs, t and mode symbols, with the parameter values bound."""
+
+    def __init__(self, d: Description, subs: dict, exprs):
+        exprs = [sp.sympify(e).xreplace(subs) for e in exprs]
+        syms = set().union(*(e.free_symbols for e in exprs))
+        switches = [(name, sp.sympify(e).xreplace(subs), m) for name, e, m in d.switches if m in syms]
+        inputs = syms | set().union(set(), *(e.free_symbols for _, e, _ in switches))
+        self.inputs = [s for s in d.inputs if s in inputs]          # description order
+        self.kinds = [d.inputs[s] for s in self.inputs]
+        self.modes = [m for _, _, m in switches]
+        self.constant = not syms                                   # no input, t or mode left
+        args = [d.t, *self.inputs]
+        self.f = sp.lambdify([*args, *self.modes], exprs, "math")
+        self.switch_f = [sp.lambdify(args, e, "math") for _, e, _ in switches]
+        self.values = [float(e) for e in exprs] if self.constant else None
+
+    def __call__(self, t: float, inputs) -> list[float]:
+        modes = [1.0 if s(t, *inputs) >= 0 else -1.0 for s in self.switch_f]
+        return self.f(t, *inputs, *modes)
+
+
+class Readers:
+    """Live readers of the description's inputs from Exudyn (markers and nodes)."""
+
+    def __init__(self, model: Model, markers: dict, refs: dict):
+        self.model, self.markers, self.refs = model, markers, refs
+
+    def reader(self, law: Law):
+        mbs_reads = []
+        for inp in law.kinds:
+            if inp.point is not None:
+                marker = self.markers[(inp.body, inp.point)]
+                ovt = OVT.Position if inp.kind in ("x", "y") else OVT.Velocity
+                k = 0 if inp.kind in ("x", "vx") else 1
+                mbs_reads.append(lambda mbs, m=marker, o=ovt, k=k: mbs.GetMarkerOutput(m, o)[k])
+            elif inp.kind == "angle":
+                node, ref = self.model.node(inp.body), self.refs[inp.body]
+                mbs_reads.append(lambda mbs, n=node, r=ref: r + mbs.GetNodeOutput(n, OVT.Coordinates)[2])
+            else:
+                node = self.model.node(inp.body)
+                mbs_reads.append(lambda mbs, n=node: mbs.GetNodeOutput(n, OVT.AngularVelocity)[2])
+        return lambda mbs: [r(mbs) for r in mbs_reads]
+
+
+def _series_inputs(law: Law, d: Description, subs: dict, pos: dict, vel: dict) -> list[Array]:
+    """The law's inputs at every step from Exudyn's body series (COM pose and rates)."""
+    out = []
+    for inp in law.kinds:
+        if inp.point is None:
+            out.append(pos[inp.body][:, 2] if inp.kind == "angle" else vel[inp.body][:, 2])
+        else:
+            out.append(_point_series(d, subs, pos, vel, inp.body, inp.point)[inp.kind])
+    return out
+
+
+def _point_series(d: Description, subs: dict, pos: dict, vel: dict, body: str, point: str) -> dict[str, Array]:
+    """Global position and velocity of a body point at every step from the body's COM pose and rates."""
+    local = np.array([float(sp.sympify(c).xreplace(subs)) for c in d.bodies[body].points[point]])
+    th, w = pos[body][:, 2], vel[body][:, 2]
+    rx = np.cos(th) * local[0] - np.sin(th) * local[1]
+    ry = np.sin(th) * local[0] + np.cos(th) * local[1]
+    return {"x": pos[body][:, 0] + rx, "y": pos[body][:, 1] + ry, "vx": vel[body][:, 0] - w * ry,
+            "vy": vel[body][:, 1] + w * rx}
+
+
+def _law_series(law: Law, t: Array, inputs: list[Array]) -> Array:
+    """(n, k) values of the law at every step (mode = sign of the switching function at the state)."""
+    if law.constant:
+        return np.tile(np.asarray(law.values, dtype=float), (len(t), 1))
+    return np.array([law(ti, [x[i] for x in inputs]) for i, ti in enumerate(t)], dtype=float)
+
+
+# --------------------------------------------------------------------------------------------
+# the built model
+# --------------------------------------------------------------------------------------------
+def _active(d: Description, j: Prismatic) -> bool:
+    """A contact whose friction law is not identically zero (kinetic coefficient or resistance > 0)."""
+    if j.friction is None:
+        return False
+    subs = {getattr(d.p, k): sp.Float(v) for k, v in d.values.items()}
+    return float(j.friction.mu_kinetic.xreplace(subs)) > 0 or float(j.friction.resistance.xreplace(subs)) > 0
+
+
+def loads_jacobian(d: Description) -> int:
+    """``computeLoadsJacobian``: 2 when the description has an active friction contact, else 0.
+
+    The regularized friction and resistance tanh(v/eps) need their derivative in the Newton matrix
+    (without it Newton diverges, see common.simulation_settings); the frictionless runs of such a
+    mechanism (``friction='none'``) keep the same setting, so the two differ only by the friction
+    itself. Without friction the other laws do not need it: for the quick-return's smooth cutting law
+    the Newton iteration counts with and without the load Jacobian agree within 0.5 % (20 s,
+    h = 1e-3: 55 962 vs 55 735) while the extra user-function calls per iteration double the CPU
+    time; an on/off law is piecewise constant, its numerical derivative across a switch meaningless.
+    """
+    return 2 if any(_active(d, j) for j in d.contacts()) else 0
+
+
+@dataclass
+class Built:
+    ps: ParameterSet
+    d: Description
+    kin: Kinematics
+    model: Model
+    friction: str
+    eps: float
+    loads_jacobian: int
+    laws: dict = field(default_factory=dict)          # load name -> Law
+    potentials: dict = field(default_factory=dict)    # potential name -> Law (energy)
+    frictions_by_contact: dict = field(default_factory=dict)
+    normals: dict = field(default_factory=dict)       # prismatic joint -> n in the guide's body frame
+    q0: Array = None                                  # the relative coordinates of the reference configuration
+
+    @property
+    def frictions(self) -> list[GuideFriction]:
+        return list(self.frictions_by_contact.values())
+
+    # --- lam mapping -----------------------------------------------------------------------------
+    def _row_sources(self, names) -> list[tuple[str, int | None]]:
+        joints = {j.name: j for j in self.d.joints}
+        out = []
+        for row in names:
+            if row in joints and isinstance(joints[row], Prismatic):
+                out.append((row, None))
+            elif row[-2:] in ("_x", "_y") and isinstance(joints.get(row[:-2]), Revolute):
+                out.append((row[:-2], 0 if row.endswith("_x") else 1))
+            else:
+                raise ValueError(f"constraint row {row!r} has no Exudyn counterpart (supported: revolute <J>_x/_y, "
+                                 f"prismatic gap <J>)")
+        return out
+
+    def _lam(self, outputs: dict[str, Array], names) -> Array:
+        """lam (..., r) from joint outputs (revolute 'Force', prismatic 'ForceLocal'), in-house convention."""
+        cols = []
+        for joint, k in self._row_sources(names):
+            f = outputs[joint]
+            cols.append(-f[..., k] if k is not None else f[..., 0] * self.normals[joint][0]
+                        + f[..., 1] * self.normals[joint][1])
+        return np.stack(cols, axis=-1)
+
+    def initial_values(self) -> tuple[Array, Array]:
+        eom = mechanisms.equations(self.ps)
+        alpha = np.array([self.model.node_output(b, OVT.Coordinates_tt)[2] for b in self.d.bodies])
+        outputs = {j.name: self.model.joint_output(j.name) for j in self.d.joints}
+        return self.kin.pinv @ alpha, self._lam(outputs, eom.constraint_names)
+
+    # --- result ----------------------------------------------------------------------------------
+    def result(self, eom, grid: common.RunGrid, solver: str, stats: dict) -> SimulationResult:
+        d, subs = self.d, self.kin.subs
+        t = grid.h * np.arange(grid.n_steps + 1)
+        pos, vel, acc, disp = {}, {}, {}, {}
+        for b in d.bodies:
+            pos[b], vel[b], acc[b] = self.model.body_series(b, grid)
+            disp[b] = self.model.series((b, "coordinates"), grid)   # displacement from the reference
+        angles = lambda series: np.column_stack([series[b][:, 2] for b in d.bodies])  # noqa: E731
+        q = self.q0 + angles(disp) @ self.kin.pinv.T      # q(0) = q0 exactly (zero displacement)
+        qd = angles(vel) @ self.kin.pinv.T
+        qdd = angles(acc) @ self.kin.pinv.T
+        outputs = {j.name: self.model.series((j.name, "force"), grid) for j in d.joints}
+        lam = self._lam(outputs, eom.constraint_names)
+        rows = list(eom.constraint_names)
+
+        forces, works = {}, {}
+        guides = {j.slider[0]: j for j in d.joints if isinstance(j, Prismatic)}
+        for name, law in self.laws.items():
+            load = next(ld for ld in d.loads if ld.name == name)
+            values = _law_series(law, t, _series_inputs(law, d, subs, pos, vel))
+            if load.point is None:
+                forces[name] = values[:, 0]
+                works[name] = values[:, 0] * vel[load.body][:, 2]
+                continue
+            pv = _point_series(d, subs, pos, vel, load.body, load.point)
+            works[name] = values[:, 0] * pv["vx"] + values[:, 1] * pv["vy"]
+            direction = self._axis_series(guides[load.body], pos) if load.body in guides else \
+                np.tile([1.0, 0.0], (len(t), 1))
+            forces[name] = values[:, 0] * direction[:, 0] + values[:, 1] * direction[:, 1]
+
+        for j in d.contacts():
+            if j.name in rows:
+                forces[f"normal_{j.name}"] = -lam[:, rows.index(j.name)]
+            if not _active(d, j):
+                continue
+            fric = self.frictions_by_contact.get(j.name)
+            if fric is not None:
+                hist = common.friction_history(fric, grid, stats)
+                coulomb, resistance, v_t = hist[:, 2], hist[:, 3], hist[:, 1]
+            else:
+                coulomb = resistance = v_t = np.zeros_like(t)
+            forces[f"friction_{j.name}"] = coulomb
+            if j.friction.resistance != 0:
+                forces[f"resistance_{j.name}"] = resistance
+            works[f"friction_{j.name}"] = (coulomb + resistance) * v_t
+        for j in d.joints:
+            f = outputs[j.name]
+            if isinstance(j, Revolute):
+                forces[f"joint_{j.name}_x"], forces[f"joint_{j.name}_y"] = -f[:, 0], -f[:, 1]
+            else:
+                n = self.normals[j.name]
+                forces[f"joint_{j.name}_n"] = -(f[:, 0] * n[0] + f[:, 1] * n[1])
+
+        bodies = {b: (float(body.mass.xreplace(subs)), float(body.inertia.xreplace(subs)))
+                  for b, body in d.bodies.items()}
+        g = float(d.gravity_g.xreplace(subs)) if d.gravity_g is not None else 0.0
+        kinetic, potential = common.body_energies(bodies, pos, vel, g)
+        for law in self.potentials.values():
+            potential = potential + _law_series(law, t, _series_inputs(law, d, subs, pos, vel))[:, 0]
+
+        active = [j for j in d.contacts() if _active(d, j)]
+        meta = {
+            "description": d.name,
+            "loads_jacobian": self.loads_jacobian,
+            "lam_mapping": self.lam_mapping(rows),
+            "reaction_reading": ("hybrid guard: live Newton iterate of the guide reaction, last accepted value "
+                                 "while the live one is the zero of the first Newton iteration; initial "
+                                 "accelerations use the fixed-point seeded reaction") if self.frictions else "not used",
+            "force_conventions": self.force_conventions(forces),
+            "load_evaluation": "laws lambdified with the parameter values bound, evaluated in Exudyn user functions "
+                               "from marker positions/velocities and node angles/rates; a mode is the sign of its "
+                               "switching function at the current state (no event location); the recorded "
+                               "'<load>' series are the laws evaluated on the converged states",
+        }
+        if active:
+            meta["work_friction"] = "work_friction_<c>: Coulomb plus resistance (the whole tangential guide force)"
+        friction = self.friction if active else "none (no friction contact with mu_k > 0 or resistance > 0)"
+        return common.assemble_result(eom, self.ps, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
+                                      lam=lam, kinetic=kinetic, potential=potential, works=works, forces=forces,
+                                      stats=stats, meta=meta)
+
+    def _axis_series(self, j: Prismatic, pos: dict) -> Array:
+        axis = np.array([float(sp.sympify(c).xreplace(self.kin.subs)) for c in j.axis])
+        if j.guide[0] == GROUND:
+            return np.tile(axis, (len(next(iter(pos.values()))), 1))
+        th = pos[j.guide[0]][:, 2]
+        return np.column_stack([np.cos(th) * axis[0] - np.sin(th) * axis[1],
+                                np.sin(th) * axis[0] + np.cos(th) * axis[1]])
+
+    def lam_mapping(self, rows) -> str:
+        parts = []
+        for row, (joint, k) in zip(rows, self._row_sources(rows)):
+            if k is not None:
+                parts.append(f"{row} = -Force_{'xy'[k]} of RevoluteJoint2D '{joint}' (force on its second body, "
+                             f"global)")
+            else:
+                n = self.normals[joint]
+                parts.append(f"{row} = ForceLocal . ({n[0]:g}, {n[1]:g}) of PrismaticJoint2D '{joint}' (force on "
+                             f"the guide body in the guide's body frame, along the joint normal)")
+        return "; ".join(parts)
+
+    def force_conventions(self, forces) -> dict[str, str]:
+        out = {}
+        for key in forces:
+            if key.startswith("normal_"):
+                out[key] = f"force on the slider along the normal of '{key[7:]}' = -lam of its row"
+            elif key.startswith("friction_"):
+                out[key] = f"Coulomb force on the slider along the axis of '{key[9:]}', -mu_k |N| tanh(v_t/eps)"
+            elif key.startswith("resistance_"):
+                out[key] = f"resistance on the slider along the axis of '{key[11:]}', -F tanh(v_t/eps)"
+            elif key.startswith("joint_") and key.endswith("_n"):
+                out[key] = "force of the prismatic joint on its slider along the joint normal (= -lam of its row)"
+            elif key.startswith("joint_"):
+                out[key] = "global force of the revolute joint on its second body b"
+            else:
+                out[key] = "the load's torque, or its force along the loaded slider's guide axis (else global x)"
+        return out
+
+
+def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = common.DEFAULT_EPS) -> Built:
+    """Assemble the Exudyn model of ``ps``'s description at the state (q0, qd0) (relative coordinates)."""
+    kin = _kinematics(ps)
+    d, subs = kin.d, kin.subs
+    val = lambda e: float(sp.sympify(e).xreplace(subs))  # noqa: E731
+    g = val(d.gravity_g) if d.gravity_g is not None else 0.0
+    model = Model()
+    states = body_states(ps, q0, qd0)
+    for b, body in d.bodies.items():
+        model.body(b, val(body.mass), val(body.inertia), states[b], g)
+    refs = {b: states[b].angle for b in d.bodies}
+    markers: dict[tuple[str, str], int] = {}
+
+    def marker(body: str, point: str) -> int:
+        if (body, point) not in markers:
+            xy = d.ground_points[point] if body == GROUND else d.bodies[body].points[point]
+            markers[(body, point)] = model.marker(body, (val(xy[0]), val(xy[1])))
+        return markers[(body, point)]
+
+    built = Built(ps, d, kin, model, friction, eps, loads_jacobian(d))
+    built.q0 = np.asarray(q0, dtype=float).copy()
+    for j in d.joints:
+        if isinstance(j, Revolute):
+            model.revolute(j.name, marker(*j.a), marker(*j.b))
+            continue
+        axis = (val(j.axis[0]), val(j.axis[1]))
+        n_guide = np.array([val(j.normal[0]), val(j.normal[1])])
+        guide_angle = refs[j.guide[0]] if j.guide[0] != GROUND else 0.0
+        slider_angle = refs[j.slider[0]] if j.slider[0] != GROUND else 0.0
+        n_slider = _rotation(slider_angle).T @ _rotation(guide_angle) @ n_guide
+        model.prismatic(j.name, marker(*j.guide), marker(*j.slider), axis0=axis, normal1=n_slider)
+        built.normals[j.name] = (float(n_guide[0]), float(n_guide[1]))
+
+    for inp in d.inputs.values():
+        if inp.point is not None:
+            marker(inp.body, inp.point)
+    readers = Readers(model, markers, refs)
+
+    def com(body: str) -> int:
+        key = (body, "__com__")
+        if key not in markers:
+            markers[key] = model.marker(body, (0.0, 0.0))
+        return markers[key]
+
+    for load in d.loads:
+        law = Law(d, subs, load.components)
+        built.laws[load.name] = law
+        m = com(load.body) if load.point is None else marker(load.body, load.point)
+        if law.constant:
+            if load.point is None:
+                model.torque(m, value=law.values[0])
+            else:
+                model.force(m, value=tuple(law.values))
+            continue
+        model_load = _user_function(law, readers.reader(law), torque=load.point is None)
+        (model.torque if load.point is None else model.force)(m, user=model_load)
+
+    for pot in d.potentials:
+        built.potentials[pot.name] = Law(d, subs, [pot.energy])
+        groups: dict[tuple[str, str | None], list] = {}
+        for sym in sorted(pot.energy.free_symbols & set(d.inputs), key=str):
+            inp = d.inputs[sym]
+            if inp.kind not in ("x", "y", "angle"):
+                raise ValueError(f"potential {pot.name!r}: energy depends on {inp.kind} of {inp.body!r}; only "
+                                 f"positions and angles are allowed")
+            groups.setdefault((inp.body, inp.point), []).append((inp.kind, sym))
+        for (body, point), syms in groups.items():
+            kinds = dict(syms)
+            if point is None:
+                law = Law(d, subs, [-sp.diff(pot.energy, kinds["angle"])])
+                model.torque(com(body), user=_user_function(law, readers.reader(law), torque=True))
+            else:
+                comps = [-sp.diff(pot.energy, kinds[k]) if k in kinds else sp.Integer(0) for k in ("x", "y")]
+                law = Law(d, subs, comps)
+                model.force(marker(body, point), user=_user_function(law, readers.reader(law), torque=False))
+
+    if friction == "regularized":
+        for j in d.contacts():
+            if not _active(d, j):
+                continue
+            obj = model.joints[j.name][0]
+            n = built.normals[j.name]
+            # N = force on the slider along the normal = -(ForceLocal . n) (= -lam); only |N| enters
+            guard = ReactionGuard(lambda mbs, o=obj, n=n: -(lambda f: f[0] * n[0] + f[1] * n[1])(
+                mbs.GetObjectOutput(o, OVT.ForceLocal)))
+            axis = (val(j.axis[0]), val(j.axis[1]))       # guide fixed in ground: global = guide frame
+            fric = GuideFriction(model, marker(*j.slider), axis, guard, mu=val(j.friction.mu_kinetic),
+                                 resistance=val(j.friction.resistance), eps=eps)
+            model.force(marker(*j.slider), user=fric)
+            built.frictions_by_contact[j.name] = fric
+    model.assemble()
+    return built
+
+
+def _user_function(law: Law, read, torque: bool):
+    f = law
+
+    if torque:
+        def user(mbs, t, load_vector):
+            return [0.0, 0.0, f(t, read(mbs))[0]]
+    else:
+        def user(mbs, t, load_vector):
+            fx, fy = f(t, read(mbs))
+            return [fx, fy, 0.0]
+    return user
+
+
+def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
+        friction: str = "regularized", eps: float = common.DEFAULT_EPS) -> SimulationResult:
+    """Simulate a parameter set's mechanism in Exudyn from the in-house consistent initial state.
+
+    Parameters
+    ----------
+    ps : ParameterSet
+    t_end : float
+        End time [s], a whole number of steps.
+    h : float
+        Fixed step [s].
+    solver : {'index3', 'index2'} (or an explicit name, which Exudyn refuses; see common.SOLVERS)
+    output_step : float, optional
+        Sampling of the result, a whole multiple of h; default every step.
+    friction : {'regularized', 'none'}
+        'none' leaves out the Coulomb friction and resistance of every contact.
+    eps : float
+        Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (common.DEFAULT_EPS).
+
+    Returns
+    -------
+    SimulationResult (see the module docstring for the mapping of every quantity)
+    """
+    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps)
+
+
+def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized",
+                          eps: float = common.DEFAULT_EPS) -> tuple[Array, Array]:
+    """Exudyn's accelerations and multipliers at a state (relative coordinates), from its solver
+    initialization alone: the initial-acceleration solve SolveDynamic performs at t = 0 (with the seeded
+    normal force if friction is on), mapped to the in-house coordinates and multiplier convention.
+
+    Returns
+    -------
+    qdd : (m,) array
+    lam : (r,) array, in ``eom.constraint_names`` order
+    """
+    return common.initial_accelerations(build, ps, q, qd, friction, eps)

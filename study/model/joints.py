@@ -1,0 +1,309 @@
+"""Joint-level description of a planar mechanism: bodies with local points, joints, loads as data.
+
+One description per mechanism is the single source from which every engine's model is generated:
+
+* the in-house equations in the coordinates the description chooses (relative joint coordinates,
+  with loop-closure constraints) and in absolute coordinates (x, y, theta per body, one constraint
+  block per joint): :func:`study.model.coordinates.lower`;
+* the Exudyn model (:mod:`study.exudyn_models.translate`);
+* the joint reactions (:mod:`study.model.reactions`) and the compiled kernels (:mod:`study.fast`).
+
+Conventions
+-----------
+* A body's local frame has its origin at the centre of mass and turns with the body's angle; its
+  named points are given in that frame. Ground points are given in the global frame.
+* ``revolute(name, (A, a), (B, b))``: point a of body A coincides with point b of body B (either may
+  be ``GROUND``). Constraint rows ``r_A(a) - r_B(b) = 0`` (two rows, ``<name>_x`` and ``<name>_y``).
+* ``prismatic(name, slider=(S, s), guide=(G, g), axis, normal)``: point s of body S slides on the
+  line through point g of G along ``axis`` (G's frame); ``normal`` (G's frame, unit, orthogonal to
+  the axis) orients the gap row ``<name> = n . (r_S(s) - r_G(g))``, so its multiplier lambda is a
+  force: the guide pushes the slider with ``-lambda n``. The relative rotation is locked
+  (row ``<name>_angle = theta_S - theta_G - angle_offset``). Optional Coulomb contact data
+  (:class:`Friction`) makes it a sliding contact with friction (guides fixed in ground only).
+* Loads are data: sympy expressions in named inputs (:meth:`Description.position`,
+  :meth:`~Description.velocity`, :meth:`~Description.angle`, :meth:`~Description.rate`,
+  :attr:`~Description.t`) and parameters (``d.p.<name>``). A switching law declares its switching
+  functions with :meth:`~Description.switch`, which returns a mode symbol (+1 or -1: the sign of the
+  switching function, frozen between located switches); the law is then smooth in every mode.
+* The relative coordinates: every body's angle is an expression of q (``body(..., angle=...)``).
+  Bodies are placed from ground along a spanning tree of revolute joints, taken in description order;
+  the joints left over (and every prismatic joint) are cut joints, whose rows are the constraints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+from typing import Any, Mapping, Sequence
+
+import sympy as sp
+
+Expr = sp.Expr
+GROUND = "ground"
+
+
+class DescriptionError(ValueError):
+    """The mechanism description is inconsistent; the message lists every problem."""
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body: mass, centroidal inertia, named local points (COM frame), angle in q."""
+
+    name: str
+    mass: Expr
+    inertia: Expr
+    points: Mapping[str, tuple[Expr, Expr]]
+    angle: Expr
+
+
+@dataclass(frozen=True)
+class Friction:
+    """Coulomb contact data of a prismatic joint: mu_s, mu_k and a constant resistance F [N]."""
+
+    mu_static: Expr
+    mu_kinetic: Expr
+    resistance: Expr = sp.Integer(0)
+
+
+@dataclass(frozen=True)
+class Revolute:
+    name: str
+    a: tuple[str, str]
+    b: tuple[str, str]
+    cut: bool | None = None
+
+
+@dataclass(frozen=True)
+class Prismatic:
+    name: str
+    slider: tuple[str, str]
+    guide: tuple[str, str]
+    axis: tuple[Expr, Expr]
+    normal: tuple[Expr, Expr]
+    angle_offset: Expr = sp.Integer(0)
+    friction: Friction | None = None
+
+
+@dataclass(frozen=True)
+class Input:
+    """A named input of the load laws: ``kind`` in x, y, vx, vy (a point), angle, rate (a body)."""
+
+    kind: str
+    body: str
+    point: str | None = None
+
+
+@dataclass(frozen=True)
+class Load:
+    """A force (fx, fy, global frame) at a body point, or a torque (``point`` None, ``components`` (tau,))."""
+
+    name: str
+    body: str
+    point: str | None
+    components: tuple[Expr, ...]
+
+
+@dataclass(frozen=True)
+class Potential:
+    """A conservative load given by its potential energy in the inputs (springs)."""
+
+    name: str
+    energy: Expr
+
+
+class Description:
+    """Collect a planar mechanism's joint-level description.
+
+    Parameters
+    ----------
+    name : str
+    coordinates : sequence of str
+        Names of the relative coordinates q (``d.q``, ``d.qd`` hold their symbols).
+    parameters : mapping str -> float or str
+        Numeric values; ``d.p.<name>`` is the sympy symbol. Parameters stay symbolic in the
+        generated code, so one derivation serves every variant that shares the description.
+        String values (a parameter file's choices) select the description's form and get no symbol.
+    label : str, optional
+        Human-readable name for reports.
+    """
+
+    def __init__(self, name: str, coordinates: Sequence[str], parameters: Mapping[str, float], label: str = ""):
+        if not coordinates or len(set(coordinates)) != len(coordinates):
+            raise DescriptionError(f"mechanism {name!r}: coordinates {list(coordinates)} must be non-empty and unique")
+        self.name = name
+        self.label = label or name
+        self.coordinate_names = tuple(coordinates)
+        self.q = sp.Matrix(sp.symbols([f"q_{c}" for c in coordinates], real=True))
+        self.qd = sp.Matrix(sp.symbols([f"qd_{c}" for c in coordinates], real=True))
+        self.values = {k: float(v) for k, v in parameters.items() if not isinstance(v, str)}
+        self.p = SimpleNamespace(**{k: sp.Symbol(f"p_{k}", real=True) for k in self.values})
+        self.t = sp.Symbol("t", real=True)
+        self.bodies: dict[str, Body] = {}
+        self.ground_points: dict[str, tuple[Expr, Expr]] = {}
+        self.joints: list[Revolute | Prismatic] = []
+        self.loads: list[Load] = []
+        self.potentials: list[Potential] = []
+        self.gravity_g: Expr | None = None
+        self.inputs: dict[sp.Symbol, Input] = {}
+        self.switches: list[tuple[str, Expr, sp.Symbol]] = []
+        self.branch: tuple[Expr, str] | None = None
+        self.forces_of_interest: dict[str, str] = {}
+
+    # --- bodies and points -------------------------------------------------------------------
+    def body(self, name: str, mass: Any, inertia: Any, points: Mapping[str, tuple[Any, Any]], angle: Any) -> str:
+        """A rigid body; ``points`` in its COM frame, ``angle`` its angle as an expression of q."""
+        if name == GROUND or name in self.bodies:
+            raise DescriptionError(f"mechanism {self.name!r}: body name {name!r} is reserved or used twice")
+        pts = {k: (sp.sympify(v[0]), sp.sympify(v[1])) for k, v in points.items()}
+        self.bodies[name] = Body(name, sp.sympify(mass), sp.sympify(inertia), pts, sp.sympify(angle))
+        return name
+
+    def ground(self, name: str, x: Any, y: Any) -> tuple[str, str]:
+        """A named point fixed in the global frame."""
+        self.ground_points[name] = (sp.sympify(x), sp.sympify(y))
+        return (GROUND, name)
+
+    # --- joints ------------------------------------------------------------------------------
+    def revolute(self, name: str, a: tuple[str, str], b: tuple[str, str], cut: bool | None = None) -> None:
+        """Point a[1] of body a[0] coincides with point b[1] of body b[0]; ``cut`` forces a loop closure."""
+        self.joints.append(Revolute(name, tuple(a), tuple(b), cut))
+
+    def prismatic(self, name: str, slider: tuple[str, str], guide: tuple[str, str], axis, normal,
+                  angle_offset: Any = 0, friction: Friction | None = None) -> None:
+        """Point slider[1] of slider[0] slides on the line through guide[1] along ``axis`` (guide frame)."""
+        self.joints.append(Prismatic(name, tuple(slider), tuple(guide), tuple(sp.sympify(v) for v in axis),
+                                     tuple(sp.sympify(v) for v in normal), sp.sympify(angle_offset), friction))
+
+    # --- load-law inputs ---------------------------------------------------------------------
+    def _input(self, kind: str, body: str, point: str | None) -> sp.Symbol:
+        tag = f"{kind}__{body}" + (f"__{point}" if point else "")
+        sym = sp.Symbol(f"in_{tag}", real=True)
+        self.inputs[sym] = Input(kind, body, point)
+        return sym
+
+    def position(self, body: str, point: str) -> tuple[sp.Symbol, sp.Symbol]:
+        """Global position (x, y) of a body point, as input symbols of a load law."""
+        return self._input("x", body, point), self._input("y", body, point)
+
+    def velocity(self, body: str, point: str) -> tuple[sp.Symbol, sp.Symbol]:
+        """Global velocity (vx, vy) of a body point, as input symbols of a load law."""
+        return self._input("vx", body, point), self._input("vy", body, point)
+
+    def angle(self, body: str) -> sp.Symbol:
+        return self._input("angle", body, None)
+
+    def rate(self, body: str) -> sp.Symbol:
+        return self._input("rate", body, None)
+
+    def switch(self, name: str, expr: Any) -> sp.Symbol:
+        """Declare a switching function of the inputs; returns its mode symbol (+1 / -1)."""
+        mode = sp.Symbol(f"mode_{len(self.switches)}", real=True)
+        self.switches.append((name, sp.sympify(expr), mode))
+        return mode
+
+    # --- loads -------------------------------------------------------------------------------
+    def gravity(self, g: Any) -> None:
+        """Uniform gravity of magnitude g along -y on every body."""
+        self.gravity_g = sp.sympify(g)
+
+    def torque(self, name: str, body: str, law: Any) -> None:
+        """A torque on a body (counter-clockwise positive), law in the inputs."""
+        self.loads.append(Load(name, body, None, (sp.sympify(law),)))
+
+    def force(self, name: str, body: str, point: str, fx: Any, fy: Any) -> None:
+        """A force (global frame) at a body point, law in the inputs."""
+        self.loads.append(Load(name, body, point, (sp.sympify(fx), sp.sympify(fy))))
+
+    def torsion_spring(self, name: str, body: str, stiffness: Any, rest_angle: Any = 0) -> None:
+        """A torsion spring between ground and a body: V = k (theta - theta0)^2 / 2."""
+        th = self.angle(body)
+        self.potentials.append(Potential(name, sp.sympify(stiffness) * (th - sp.sympify(rest_angle)) ** 2 / 2))
+
+    def spring(self, name: str, a: tuple[str, str], b: tuple[str, str], stiffness: Any, rest_length: Any) -> None:
+        """A linear spring between two body points: V = k (|r_a - r_b| - L0)^2 / 2."""
+        (xa, ya), (xb, yb) = self.position(*a), self.position(*b)
+        length = sp.sqrt((xa - xb) ** 2 + (ya - yb) ** 2)
+        self.potentials.append(Potential(name, sp.sympify(stiffness) * (length - sp.sympify(rest_length)) ** 2 / 2))
+
+    # --- metadata ----------------------------------------------------------------------------
+    def assembly_branch(self, expr: Any, label: str) -> None:
+        """The assembly branch: ``expr(q) > 0`` on the intended configuration."""
+        self.branch = (sp.sympify(expr), label)
+
+    def contacts(self) -> list[Prismatic]:
+        return [j for j in self.joints if isinstance(j, Prismatic) and j.friction is not None]
+
+    # --- checks ------------------------------------------------------------------------------
+    def validate(self) -> None:
+        """Report every problem of the description in one DescriptionError."""
+        problems = []
+        params = set(vars(self.p).values())
+        if not self.bodies:
+            problems.append("no bodies")
+        names = [j.name for j in self.joints] + [ld.name for ld in self.loads] + [pt.name for pt in self.potentials]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            problems.append(f"duplicate joint or load names: {dup}")
+
+        def check_point(where: str, ref: tuple[str, str]) -> None:
+            body, point = ref
+            if body == GROUND:
+                if point not in self.ground_points:
+                    problems.append(f"{where}: unknown ground point {point!r}")
+            elif body not in self.bodies:
+                problems.append(f"{where}: unknown body {body!r}")
+            elif point not in self.bodies[body].points:
+                problems.append(f"{where}: body {body!r} has no point {point!r} (has {sorted(self.bodies[body].points)})")
+
+        for b in self.bodies.values():
+            for key, e in (("mass", b.mass), ("inertia", b.inertia)):
+                if e.free_symbols - params:
+                    problems.append(f"body {b.name!r}.{key} uses symbols other than parameters: "
+                                    f"{sorted(map(str, e.free_symbols - params))}")
+            stray = b.angle.free_symbols - params - set(self.q)
+            if stray:
+                problems.append(f"body {b.name!r}.angle uses unknown symbols {sorted(map(str, stray))}")
+            for pname, xy in b.points.items():
+                for e in xy:
+                    if e.free_symbols - params:
+                        problems.append(f"point {b.name}.{pname} must be constant in the body frame")
+        for j in self.joints:
+            if isinstance(j, Revolute):
+                check_point(f"joint {j.name!r}", j.a)
+                check_point(f"joint {j.name!r}", j.b)
+            else:
+                check_point(f"joint {j.name!r}", j.slider)
+                check_point(f"joint {j.name!r}", j.guide)
+                ax, n = j.axis, j.normal
+                if sp.simplify(ax[0] ** 2 + ax[1] ** 2 - 1) != 0 or sp.simplify(n[0] ** 2 + n[1] ** 2 - 1) != 0 \
+                        or sp.simplify(ax[0] * n[0] + ax[1] * n[1]) != 0:
+                    problems.append(f"joint {j.name!r}: axis and normal must be orthogonal unit vectors")
+                if j.friction is not None and j.guide[0] != GROUND:
+                    problems.append(f"joint {j.name!r}: friction is supported on guides fixed in ground only")
+        allowed = params | set(self.inputs) | {self.t} | {m for _, _, m in self.switches}
+        for ld in self.loads:
+            if ld.body not in self.bodies:
+                problems.append(f"load {ld.name!r}: unknown body {ld.body!r}")
+            elif ld.point is not None:
+                check_point(f"load {ld.name!r}", (ld.body, ld.point))
+            for e in ld.components:
+                stray = e.free_symbols - allowed
+                if stray:
+                    problems.append(f"load {ld.name!r} uses unknown symbols {sorted(map(str, stray))}")
+        for name, e, _ in self.switches:
+            stray = e.free_symbols - params - set(self.inputs) - {self.t}
+            if stray:
+                problems.append(f"switch {name!r} uses unknown symbols {sorted(map(str, stray))}")
+        for inp in self.inputs.values():
+            if inp.point is None and inp.body not in self.bodies:
+                problems.append(f"input {inp.kind} of unknown body {inp.body!r}")
+            elif inp.point is not None:
+                check_point(f"input {inp.kind}", (inp.body, inp.point))
+        if problems:
+            raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
+
+
+def rotation(angle: Expr) -> sp.Matrix:
+    """The planar rotation matrix R(angle)."""
+    return sp.Matrix([[sp.cos(angle), -sp.sin(angle)], [sp.sin(angle), sp.cos(angle)]])
