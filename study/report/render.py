@@ -12,7 +12,7 @@ content. The HTML rendering uses maintained libraries:
   holding only an image becomes a ``<figure>``; the image is embedded as a data URI, and a
   following ``*Figure N.* ...`` caption paragraph, see :func:`number_figures`, becomes its
   caption) and a horizontally scrolling container around every table, whose first (key) column
-  stays in view.
+  stays in view; long prose cells wrap at a readable width.
 
 Raw HTML in the Markdown is escaped, never passed through.
 """
@@ -38,6 +38,9 @@ from mdit_py_plugins.footnote import footnote_plugin
 _HEADING = re.compile(r"^(#{1,6})\s+(.*?)\s*#*\s*$")
 _IMAGE_LINE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)\s*$")
 _CAPTION = re.compile(r"^\*Figure (\d+)\.\*")
+# A table cell with more text than this (and no math) is prose: it wraps at a readable width
+# (CSS td.prose) instead of being squeezed by wide neighbours.
+PROSE_CELL_CHARS = 80
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_\[\]<>$])")
 # Headings listed in the table of contents.
 TOC_LEVELS = (2, 3)
@@ -48,15 +51,17 @@ body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; max
 h1, h2, h3 { border-bottom: 1px solid #d0d7de; padding-bottom: .2em; }
 nav.toc { background: #f6f8fa; border: 1px solid #d0d7de; border-radius: 6px; padding: .4em 1.2em; margin: 1em 0; }
 nav.toc ol { margin: .2em 0; padding-left: 1.4em; }
+nav.toc > ol { columns: 2; column-gap: 2em; }
+nav.toc li { break-inside: avoid; }
 .table-wrap { overflow-x: auto; margin: 1em 0; max-width: 100%; }
 table { border-collapse: separate; border-spacing: 0; font-size: 0.85em; }
 th, td { border: 1px solid #d0d7de; border-width: 0 1px 1px 0; padding: 3px 7px; vertical-align: top; background: #fff; }
 tr > :first-child { border-left-width: 1px; position: sticky; left: 0; z-index: 1; }
 thead th { border-top-width: 1px; background: #f6f8fa; }
 tr:nth-child(even) td { background: #fbfbfc; }
-td { min-width: 4em; }
+td.prose { min-width: 24em; }
 code { background: #f3f4f6; padding: 0 3px; border-radius: 3px; font-size: 0.92em; overflow-wrap: anywhere; }
-math { font-size: 1.05em; }
+math { font-size: 1.05em; font-family: "Latin Modern Math", "STIX Two Math", "Cambria Math", "DejaVu Math TeX Gyre", math; }
 math [mathcolor] { background: #ffe7a3; border-radius: 2px; }
 .math-error { color: #b00020; }
 figure { margin: 1.2em 0; }
@@ -246,6 +251,13 @@ def _toc(tokens: list[Token], renderer, options, env) -> str:
     return "\n".join(out)
 
 
+def _td_open(self, tokens: list[Token], idx: int, options, env) -> str:
+    content = tokens[idx + 1].content if idx + 1 < len(tokens) else ""
+    if len(content) > PROSE_CELL_CHARS and "$" not in content:
+        tokens[idx].attrJoin("class", "prose")
+    return self.renderToken(tokens, idx, options, env)
+
+
 def markdown_parser(image_source: Callable[[str], str] = lambda src: src) -> MarkdownIt:
     """The report's Markdown parser: CommonMark, GFM tables, footnotes, heading ids, $math$, figures.
 
@@ -257,6 +269,7 @@ def markdown_parser(image_source: Callable[[str], str] = lambda src: src) -> Mar
     md.use(dollarmath_plugin, allow_space=False, allow_digits=False, double_inline=True,
            renderer=lambda content, options: math_html(content, options.get("display_mode", False)))
     md.core.ruler.push("figures", _figures(image_source))
+    md.add_render_rule("td_open", _td_open)
     md.add_render_rule("table_open", lambda self, tokens, idx, options, env:
                        '<div class="table-wrap">\n' + self.renderToken(tokens, idx, options, env))
     md.add_render_rule("table_close", lambda self, tokens, idx, options, env:
