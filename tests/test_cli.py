@@ -9,6 +9,7 @@ import pytest
 
 from study import SimulationResult
 from study.cli import main
+from study.reference_data import tolerance
 
 
 def test_simulate_writes_result(tmp_path, capsys):
@@ -53,7 +54,7 @@ def test_simulate_applies_the_parameter_sets_friction_by_default(tmp_path, capsy
     np.testing.assert_array_equal(default.q, exact.q)
     np.testing.assert_array_equal(default.forces["friction_guide"], exact.forces["friction_guide"])
     assert "friction_guide" not in none.forces
-    assert np.max(np.abs(default.q - none.q)) > 1e-3
+    assert np.max(np.abs(default.q - none.q)) > tolerance("cli_friction_effect")
     # the seed's guide holds the slider (it sticks within milliseconds): friction balances it
     assert default.forces["stick_guide"][-1] == 1
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from chromium import Chromium, find_chromium
+from study.reference_data import tolerance
 
 ROOT = Path(__file__).resolve().parents[1]
 REPORT = ROOT / "reports" / "report.html"
@@ -23,7 +24,7 @@ ERRATA_SHOT_HEIGHT = 1400  # [px] of the errata section shown in its screenshot
 # Markdown, every <math> and <code> element stands as one placeholder character (formulas and code
 # may hold brackets and stars; a link whose text is code must still be found).
 CHECKS_JS = r"""
-(() => {
+((slack) => {
   const width = document.documentElement.clientWidth;
   const images = [...document.images].map(img => ({alt: img.alt.slice(0, 80),
       loaded: img.complete && img.naturalWidth > 0 && img.getBoundingClientRect().width > 0}));
@@ -35,7 +36,7 @@ CHECKS_JS = r"""
   for (const el of document.body.querySelectorAll('*')) {
     if (el.closest('.table-wrap')) continue;  // a scrolling container's content may be wide
     const r = el.getBoundingClientRect();
-    if (r.right > width + 0.5 || r.left < -0.5) overflow.push(el.tagName.toLowerCase() + (el.id ? '#' + el.id : '') + ' right=' + Math.round(r.right));
+    if (r.right > width + slack || r.left < -slack) overflow.push(el.tagName.toLowerCase() + (el.id ? '#' + el.id : '') + ' right=' + Math.round(r.right));
   }
   const clone = document.body.cloneNode(true);
   clone.querySelectorAll('math, code').forEach(e => e.replaceWith('\u25a2'));
@@ -49,7 +50,7 @@ CHECKS_JS = r"""
           tables: document.querySelectorAll('table').length,
           wrapped: document.querySelectorAll('.table-wrap > table').length,
           toc: document.querySelectorAll('nav.toc a').length};
-})()
+})(SLACK)
 """
 
 
@@ -71,7 +72,7 @@ def inspect(report: Path, screenshots: Path | None = None) -> dict:
     executable = find_chromium()
     with Chromium(executable, *VIEWPORT) as browser:
         browser.open(report.resolve().as_uri())
-        found = browser.evaluate(CHECKS_JS)
+        found = browser.evaluate(CHECKS_JS.replace("SLACK", repr(tolerance("browser_overflow_px"))))
         if screenshots is not None:
             browser.screenshot(screenshots / "first_screen.png")
             errata = found["errata"]
