@@ -10,7 +10,7 @@ SLOW_PASSED := .cache/slow-tests.passed
 export PYTHONHASHSEED := 0
 SOURCES := $(shell find study tests reference -type f -not -name '*.pyc') pyproject.toml
 
-.PHONY: test reproduce run errata initial report bench clean-cache
+.PHONY: test reproduce run errata initial report bench browser check-report clean-cache
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -39,7 +39,17 @@ run: $(STAMP)
 
 # Accuracy per CPU second, in-house vs Exudyn, measured side by side -> reports/benchmarks/
 bench: $(STAMP)
-	$(PY) -m study.bench
+	$(PY) -m study bench
+
+# Headless Chromium for the report's browser check (Debian package; needs the rights to apt-get).
+# `make test` and CI do not need it: without it the check is skipped with its reason.
+browser:
+	@command -v chromium >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -qq chromium; }
+
+# Open reports/report.html in headless Chromium: images, raw Markdown, math sizes, overflow;
+# screenshots -> reports/screenshots/ (part of the slow tests that `make reproduce` runs).
+check-report: $(STAMP)
+	$(PY) -m pytest -q -m slow -k browser
 
 errata: $(STAMP)
 	$(PY) -m study errata

@@ -647,13 +647,22 @@ def save_work_precision_figure(wp: pd.DataFrame, out: Path) -> Path:
     return save_figure(benchmark_work_precision_figure(wp, LEVELS), out, "work_precision")
 
 
-def main(argv=None) -> int:
-    """Command line entry point (see the module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m study.bench", description=__doc__.split("\n")[0])
+def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """The benchmark's options (shared by ``python -m study.bench`` and ``python -m study bench``)."""
     parser.add_argument("--quick", action="store_true", help="short smoke run (1-2 s horizons, few repeats)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     parser.add_argument("--skip-compile", action="store_true", help="do not measure the one-off compile time")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Command line entry point (see the module docstring)."""
+    parser = argparse.ArgumentParser(prog="python -m study.bench", description=__doc__.split("\n")[0])
+    return run(add_arguments(parser).parse_args(argv))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark with parsed options (see :func:`add_arguments`); returns the exit code."""
     global REPEATS
     if args.quick:
         REPEATS = 2

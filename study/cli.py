@@ -11,6 +11,16 @@ from pathlib import Path
 from study.pipeline import CASES_DIR
 
 REPORTS = Path("reports")
+# One example per command, shown at the end of its --help.
+EXAMPLES = {
+    "initial": "python -m study initial --out reports",
+    "errata": "python -m study errata --out reports",
+    "report": "python -m study report --out reports",
+    "run": "python -m study run sliding_mode --workers 2",
+    "reproduce": "python -m study reproduce --workers 2",
+    "simulate": "python -m study simulate slider_crank --variant slip_then_stick --t-end 5 --out /tmp/sc",
+    "bench": "python -m study bench --quick --out /tmp/bench",
+}
 
 
 def _initial(args: argparse.Namespace) -> int:
@@ -31,8 +41,22 @@ def _errata(args: argparse.Namespace) -> int:
     return 0
 
 
+def _friction_text(result, chosen_by_default: bool) -> str:
+    """How friction ran, for the one-line summary: treatment, settings and whether it was the default."""
+    name = result.meta.get("friction")
+    if name is None:
+        text = "friction none"
+    elif name == "regularized":
+        text = f"friction regularized ({result.meta.get('friction_sgn', '?')}, eps = {result.meta['friction_eps']:g} m/s)"
+    elif name == "sign":
+        text = f"friction sign (plain sgn, stick band {result.meta['friction_eps']:g} m/s)"
+    else:
+        text = f"friction {name}"
+    return text + (" [parameter set's default]" if chosen_by_default else "")
+
+
 def _simulate(args: argparse.Namespace) -> int:
-    from study.simulate import simulate
+    from study.simulate import default_friction, resolve, simulate
 
     options = {}
     for item in args.option or []:
@@ -44,18 +68,30 @@ def _simulate(args: argparse.Namespace) -> int:
         except ValueError:
             options[key] = value
     try:
-        result = simulate(args.mechanism, variant=args.case, t_end=args.t_end, method=args.method,
+        friction = args.friction
+        if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
+            friction = default_friction(resolve(args.mechanism, args.variant)[0]) or "none"
+        result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
                           integrator=args.integrator, rtol=args.rtol, atol=args.atol, step=args.step,
-                          acceleration_solver=args.acceleration_solver, **options)
+                          acceleration_solver=args.acceleration_solver, backend=args.backend,
+                          friction=None if friction == "none" else friction, friction_eps=args.friction_eps,
+                          friction_sgn=args.friction_sgn, **options)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     path = result.save(args.out)
     s = result.summary()
-    print(f"{args.mechanism}/{args.case} {args.method} {args.integrator}: max|Phi| = {s['max_abs_phi']:.3e}, "
+    print(f"{args.mechanism}/{args.variant} {args.method} {args.integrator} ({args.backend}), "
+          f"{_friction_text(result, args.friction is None)}: max|Phi| = {s['max_abs_phi']:.3e}, "
           f"energy error = {s['energy_error']:.3e} J ({s['energy_error_relative']:.2e} of max T), "
           f"CPU {s['cpu_seconds']:.3f} s, {result.stats['nfev']} evaluations -> {path}")
     return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from study.bench import run
+
+    return run(args)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -141,12 +177,26 @@ def build_parser() -> argparse.ArgumentParser:
     from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import STABILIZATIONS
 
+    from study.simulate import BACKENDS
+    from study.solver.friction import FRICTION_TREATMENTS
+    from study.solver.stabilization import SIGN_FUNCTIONS
+
     p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
     p.add_argument("mechanism", choices=list(available_mechanisms()))
-    p.add_argument("--case", default="seed", help="parameter-set variant (default: seed)")
+    p.add_argument("--variant", "--case", dest="variant", default="seed",
+                   help="parameter-set variant (default: seed; --case is an alias)")
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
     p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
     p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
+    p.add_argument("--backend", default="reference", choices=list(BACKENDS),
+                   help="reference: Python + scipy (default); compiled: numba (built-in mechanisms)")
+    p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
+                   help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
+                        "stick/slip where a contact has friction, else none)")
+    p.add_argument("--friction-eps", type=float, default=1e-3, metavar="EPS",
+                   help="regularization width [m/s] of 'regularized', stick band of 'sign' (default 1e-3)")
+    p.add_argument("--friction-sgn", default="tanh", choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
+                   help="smooth sgn of 'regularized' (default tanh)")
     p.add_argument("--rtol", type=float, default=1e-8)
     p.add_argument("--atol", type=float, default=1e-10)
     p.add_argument("--step", type=float, default=None, help="fixed step h (RK4)")
@@ -155,6 +205,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stabilization option, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8")
     p.add_argument("--out", type=Path, required=True, help="output path (writes .csv and .json)")
     p.set_defaults(func=_simulate)
+
+    from study.bench import add_arguments as bench_arguments
+
+    p = sub.add_parser("bench", help="benchmark: accuracy per CPU second, in-house vs Exudyn (same as "
+                                     "python -m study.bench)")
+    bench_arguments(p).set_defaults(func=_bench)
+
+    for name, example in EXAMPLES.items():  # every command's --help ends with one example
+        command = sub.choices[name]
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
+        command.epilog = f"example:\n  {example}"
     return parser
 
 

@@ -48,6 +48,7 @@ from study.mechanisms import quick_return, slider_crank
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
 from study.params import REFERENCE_DIR, ParameterSet, load_parameters
+from study.report.render import md_escape, md_math, md_table
 from study.solver.initial import consistent_initial_conditions
 
 FORMULAS_PATH = REFERENCE_DIR / "printed_formulas.toml"
@@ -57,7 +58,11 @@ EXACT = "exact"
 EQUIVALENT = "equivalent on the constraint manifold"
 WRONG = "wrong"
 VERDICTS = (EXACT, EQUIVALENT, WRONG)
-COLUMNS = ("formula", "paper", "equation", "verdict", "printed", "derived", "note")
+COLUMNS = ("formula", "paper", "equation", "verdict", "printed", "derived", "derived_latex", "difference_latex",
+           "note")
+# Colour of the derived terms (entries) that the printed formula lacks, in ``derived_latex``. A
+# scoped ``{\color{...} ...}`` renders the same in MathJax (code hosts) and in latex2mathml (report).
+DIFFERENCE_COLOR = "crimson"
 KINDS = ("expression", "generalized_force", "potential", "equation", "sparse", "initial_conditions")
 
 # Number of random configurations on the constraint manifold per mechanism; each one is a full
@@ -189,6 +194,7 @@ class _Context:
         self.extras = {k: sp.Symbol(f"x_{k}", real=True) for k in spec.extras if k not in self.parameters}
         self.names.update(self.extras)
         self.display = {sym: sp.Symbol(name) for name, sym in self.names.items()}
+        self.tex_names = {sym: _tex_symbol(name) for name, sym in self.names.items()}
         self._targets: dict[str, sp.Matrix] = {}
         self._samples = None
 
@@ -206,6 +212,10 @@ class _Context:
     def show(self, expr: sp.Expr, simplify: bool = True) -> str:
         """An expression in the printed symbol names, simplified for display unless told not to."""
         return str((_simplify(expr) if simplify else sp.sympify(expr)).xreplace(self.display))
+
+    def tex(self, expr: sp.Expr) -> str:
+        """LaTeX of an expression in the printed symbols (q_1, \\dot{q}_1, l_1, ...), as it stands."""
+        return sp.latex(sp.sympify(expr), symbol_names=self.tex_names)
 
     # --- targets -------------------------------------------------------------------------------
     def target(self, name: str) -> sp.Matrix:
@@ -472,6 +482,58 @@ def _show_matrix(ctx: _Context, mat: sp.Matrix, simplify: bool = True) -> str:
     return "[" + ", ".join("[" + ", ".join(show(x) for x in mat.row(i)) + "]" for i in range(mat.rows)) + "]"
 
 
+def _tex_symbol(name: str) -> str:
+    """LaTeX of a printed symbol name: q1 -> q_{1}, qd1 -> \\dot{q}_{1}, qdd1 -> \\ddot{q}_{1}, l1 -> l_{1}."""
+    match = re.fullmatch(r"q(d{0,2})(\d+)", name)
+    if match:
+        return {"": "q", "d": r"\dot{q}", "dd": r"\ddot{q}"}[match.group(1)] + f"_{{{match.group(2)}}}"
+    return sp.latex(sp.Symbol(name))
+
+
+def _tex_marked(tex: str) -> str:
+    return rf"{{\color{{{DIFFERENCE_COLOR}}}{tex}}}"
+
+
+def _terms(expr: sp.Expr) -> set[sp.Expr]:
+    """The terms of expr in the canonical trigonometric basis (see _trig_canonical)."""
+    return set(sp.Add.make_args(_trig_canonical(expr)))
+
+
+def _tex_against(ctx: _Context, derived: sp.Expr, printed: sp.Expr | None) -> str:
+    """LaTeX of derived in its display form; where printed differs, the derived terms that printed
+    lacks (compared term by term after expansion) are marked in DIFFERENCE_COLOR.
+    A derived entry that is one term (a product) is marked whole."""
+    shown = _simplify(derived)
+    if printed is None or _is_zero(printed - derived):
+        return ctx.tex(shown)
+    have = _terms(printed)
+    terms = shown.as_ordered_terms() if isinstance(shown, sp.Add) else [shown]
+    parts = []
+    for k, term in enumerate(terms):
+        negative = term.could_extract_minus_sign()
+        body = ctx.tex(-term if negative else term)
+        if isinstance(-term if negative else term, sp.Add):
+            body = rf"\left({body}\right)"
+        if not _terms(term) <= have:
+            body = _tex_marked(body)
+        parts.append(("- " if negative else ("+ " if k else "")) + body)
+    return " ".join(parts)
+
+
+def _tex_matrix(mat: sp.Matrix, entry: Callable[[int], str]) -> str:
+    """A scalar as its entry, a vector or matrix as a bmatrix of the entries (k in row-major order)."""
+    if mat.shape == (1, 1):
+        return entry(0)
+    rows = [" & ".join(entry(i * mat.cols + j) for j in range(mat.cols)) for i in range(mat.rows)]
+    return r"\begin{bmatrix}" + r" \\ ".join(rows) + r"\end{bmatrix}"
+
+
+def _tex_difference(ctx: _Context, printed: sp.Matrix, derived: sp.Matrix) -> str:
+    """LaTeX of printed - derived, simplified, entry by entry."""
+    delta = printed - derived
+    return _tex_matrix(delta, lambda k: ctx.tex(_simplify(delta[k])))
+
+
 def _label(mat: sp.Matrix, k: int) -> str:
     i, j = divmod(k, mat.cols)
     return f"[{i + 1}]" if mat.cols == 1 else f"[{i + 1},{j + 1}]"
@@ -534,6 +596,8 @@ class _Judgement:
     verdict: str
     derived: str
     finding: str
+    derived_latex: str = ""
+    difference_latex: str = ""
 
 
 def _judge_expression(ctx: _Context, entry: Mapping[str, Any], expr: Any) -> _Judgement:
@@ -550,38 +614,44 @@ def _judge_expression(ctx: _Context, entry: Mapping[str, Any], expr: Any) -> _Ju
         return _judge_potential(ctx, printed, derived)
     which = _differences(ctx, printed, derived)
     if not which:  # identical: the printed form is a form of the derived one
-        return _Judgement(EXACT, _show_matrix(ctx, printed, simplify=False), "")
+        return _Judgement(EXACT, _show_matrix(ctx, printed, simplify=False), "",
+                          _tex_matrix(printed, lambda k: ctx.tex(printed[k])))
     shown = _show_matrix(ctx, derived)
+    tex = (_tex_matrix(derived, lambda k: _tex_against(ctx, derived[k], printed[k])),
+           _tex_difference(ctx, printed, derived))
     note = _difference_note(ctx, printed, derived, which)
     agree = _agree_numerically(ctx, [printed[k] for k in which], [derived[k] for k in which])
     if all(agree):
-        return _Judgement(EQUIVALENT, shown, note + " (zero at every manifold sample)")
+        return _Judgement(EQUIVALENT, shown, note + " (zero at every manifold sample)", *tex)
     if kind == "generalized_force":
         delta = printed - derived
         columns = [delta.col(j) for j in range(delta.cols)]
         if all(_in_range_of_phi_q_t(ctx, col, list(printed.col(j)) + list(derived.col(j)))
                for j, col in enumerate(columns)):
             notes = [_range_note(ctx, col, entry["target"]) for col in columns if any(not _is_zero(x) for x in col)]
-            return _Judgement(EQUIVALENT, shown, note + ". " + "; ".join(notes))
-    return _Judgement(WRONG, shown, note)
+            return _Judgement(EQUIVALENT, shown, note + ". " + "; ".join(notes), *tex)
+    return _Judgement(WRONG, shown, note, *tex)
 
 
 def _judge_equation(ctx: _Context, printed: sp.Matrix, derived: sp.Matrix) -> _Judgement:
     p, d = printed[0], derived[0]
+    as_printed = ctx.tex(p) + " = 0"
     if _is_zero(p - d):
-        return _Judgement(EXACT, ctx.show(p, simplify=False) + " = 0", "")
+        return _Judgement(EXACT, ctx.show(p, simplify=False) + " = 0", "", as_printed)
     ratio = sp.cancel(_trig_canonical(p) / _trig_canonical(d))
     state = set(ctx.q) | set(ctx.qd) | set(ctx.qdd)
     if ratio != 0 and not (ratio.free_symbols & state) and _is_zero(p - ratio * d):
-        return _Judgement(EXACT, ctx.show(p, simplify=False) + " = 0", f"the printed equation is the derived one times {ctx.show(ratio)}")
+        return _Judgement(EXACT, ctx.show(p, simplify=False) + " = 0", f"the printed equation is the derived one times {ctx.show(ratio)}",
+                          as_printed)
     shown = ctx.show(d) + " = 0"
+    tex = (_tex_against(ctx, d, p) + " = 0", _tex_difference(ctx, printed, derived))
     smp = ctx.samples()
     value = smp.evaluate(ctx, [p])[:, 0]
     scale = smp.magnitude(ctx, [p])[:, 0]
     note = f"printed - derived = {ctx.show(p - d)}"
     if np.all(np.abs(value) <= MANIFOLD_RTOL * scale + 1e-300):
-        return _Judgement(EQUIVALENT, shown, note + " (the printed equation holds wherever the derived one does)")
-    return _Judgement(WRONG, shown, note + " (the printed equation fails where the derived one holds)")
+        return _Judgement(EQUIVALENT, shown, note + " (the printed equation holds wherever the derived one does)", *tex)
+    return _Judgement(WRONG, shown, note + " (the printed equation fails where the derived one holds)", *tex)
 
 
 def _judge_potential(ctx: _Context, printed: sp.Matrix, derived: sp.Matrix) -> _Judgement:
@@ -591,23 +661,24 @@ def _judge_potential(ctx: _Context, printed: sp.Matrix, derived: sp.Matrix) -> _
     grad = sp.Matrix([diff]).jacobian(ctx.q).T
     if all(_is_zero(x) for x in grad):
         extra = "" if _is_zero(diff) else f"the two differ by the constant {ctx.show(diff)}"
-        return _Judgement(EXACT, ctx.show(p, simplify=False), extra)
+        return _Judgement(EXACT, ctx.show(p, simplify=False), extra, ctx.tex(p))
     shown = ctx.show(d)
+    tex = (_tex_against(ctx, d, p), _tex_difference(ctx, printed, derived))
     note = f"printed - derived = {ctx.show(diff)}"
     smp = ctx.samples()
     values = smp.evaluate(ctx, [diff])[:, 0]
     scale = (smp.magnitude(ctx, [p]) + smp.magnitude(ctx, [d]))[:, 0]
     if np.ptp(values) > MANIFOLD_RTOL * scale.max():
-        return _Judgement(WRONG, shown, note)
+        return _Judgement(WRONG, shown, note, *tex)
     return _Judgement(EQUIVALENT, shown, note + ", constant on the manifold; for the gradients, "
-                      + _range_note(ctx, grad, "potential_gradient"))
+                      + _range_note(ctx, grad, "potential_gradient"), *tex)
 
 
 def _judge_sparse(ctx: _Context, entry: Mapping[str, Any]) -> _Judgement:
     target = ctx.target(entry["target"])
-    listed, bad = set(), []
+    listed, bad, printed = set(), [], {}
     for i, j, text in entry["expr"]:
-        p = ctx.parse(text)
+        p = printed[i, j] = ctx.parse(text)
         if _is_zero(p - target[i - 1, j - 1]):
             listed.add((i, j))
         else:
@@ -615,8 +686,11 @@ def _judge_sparse(ctx: _Context, entry: Mapping[str, Any]) -> _Judgement:
     nonzero = [(i + 1, j + 1) for i in range(target.rows) for j in range(target.cols) if not _is_zero(target[i, j])]
     missing = [f"[{i},{j}] = {ctx.show(target[i - 1, j - 1])} not listed" for i, j in nonzero if (i, j) not in listed]
     shown = "; ".join(f"[{i},{j}] = {ctx.show(target[i - 1, j - 1])}" for i, j in nonzero)
+    # an entry the paper does not list is marked whole (compared with 0)
+    tex = r",\quad ".join(f"[{i},{j}] = {_tex_against(ctx, target[i - 1, j - 1], printed.get((i, j), sp.S.Zero))}"
+                          for i, j in nonzero)
     verdict = EXACT if not bad and not missing else WRONG
-    return _Judgement(verdict, shown, "; ".join(bad + missing))
+    return _Judgement(verdict, shown, "; ".join(bad + missing), tex)
 
 
 def _decimals(text: Any) -> int | None:
@@ -637,13 +711,15 @@ def _judge_initial(ctx: _Context, entry: Mapping[str, Any]) -> _Judgement:
     qd_ind = printed[ind] if rates else np.zeros(len(ind))
     state = consistent_initial_conditions(kin, q_printed, ind, qd_ind)
     ours = state.qd if rates else state.q
-    bad, shown = [], []
+    bad, shown, tex = [], [], []
     for k, text in enumerate(entry["expr"]):
         d = _decimals(text)
         tol = 0.5 * 10.0 ** -d if d is not None else EXACT_NUMBER_RTOL * max(1.0, abs(printed[k]))
         shown.append(f"{ours[k]:.{max(6, (d or 0) + 2)}f}")
+        tex.append(shown[-1])
         if abs(ours[k] - printed[k]) > tol * (1 + 1e-9):
             bad.append(f"[{k + 1}] printed {text}, reproduced {ours[k]:.6g}")
+            tex[-1] = _tex_marked(tex[-1])
     name = "qd(0)" if rates else "q(0)"
     branch = "satisfies" if mechanisms.on_branch(ctx.ps, state.q) else "VIOLATES"
     if rates:
@@ -651,7 +727,9 @@ def _judge_initial(ctx: _Context, entry: Mapping[str, Any]) -> _Judgement:
     else:
         residual = f"|Phi| of the printed q(0): {np.max(np.abs(kin.phi(q_printed))):.3g}"
     finding = "; ".join(bad + [residual, f"the Newton solution {branch} the assembly-branch test ({ic.branch})"])
-    return _Judgement(EXACT if not bad else WRONG, f"{name} = [{', '.join(shown)}]", finding)
+    symbol = r"\dot{q}(0)" if rates else "q(0)"
+    return _Judgement(EXACT if not bad else WRONG, f"{name} = [{', '.join(shown)}]", finding,
+                      symbol + r" = \begin{bmatrix}" + r" \\ ".join(tex) + r"\end{bmatrix}")
 
 
 def check_formula(entry: Mapping[str, Any]) -> dict[str, str]:
@@ -665,7 +743,9 @@ def check_formula(entry: Mapping[str, Any]) -> dict[str, str]:
     Returns
     -------
     dict
-        formula, paper, equation, verdict, printed, derived, note.
+        formula, paper, equation, verdict, printed, derived, derived_latex (the derived form as
+        LaTeX, with the terms the printed formula lacks in DIFFERENCE_COLOR), difference_latex
+        (printed - derived as LaTeX, empty where they are identical), note.
     """
     ctx = _context(entry["paper"])
     kind = entry["kind"]
@@ -688,6 +768,8 @@ def check_formula(entry: Mapping[str, Any]) -> dict[str, str]:
         "verdict": judged.verdict,
         "printed": entry["printed"],
         "derived": judged.derived,
+        "derived_latex": judged.derived_latex,
+        "difference_latex": judged.difference_latex,
         "note": note,
     }
 
@@ -713,16 +795,21 @@ def errata_table() -> pd.DataFrame:
     -------
     pandas.DataFrame
         Columns formula, paper, equation, verdict, printed, derived (the derived, i.e. corrected,
-        form in the printed symbol names), note; one row per formula, in file order.
+        form in the printed symbol names), derived_latex and difference_latex (see
+        :func:`check_formula`), note; one row per formula, in file order.
     """
     return pd.DataFrame(list(_rows()), columns=list(COLUMNS))
 
 
 def _markdown(df: pd.DataFrame) -> str:
-    def cell(text: str, code: bool = False) -> str:
-        text = str(text).replace("|", "\\|").replace("\n", " ")
-        return f"`{text}`" if code else text
-
+    """errata.md: per formula a row with the printed form and the note, a row with the derived form
+    and, where they differ, a row with printed - derived, so the forms line up for comparison."""
+    rows = []
+    for row in df.itertuples(index=False):
+        rows.append([row.formula, row.equation, row.verdict, "printed", md_math(row.printed), md_escape(row.note)])
+        rows.append(["", "", "", "derived", md_math(row.derived_latex), ""])
+        if row.difference_latex:
+            rows.append(["", "", "", "printed\u00a0−\u00a0derived", md_math(row.difference_latex), ""])
     counts = df["verdict"].value_counts()
     lines = [
         "# Errata: printed formulas of papers 000 and 001 against the derived equations",
@@ -730,14 +817,12 @@ def _markdown(df: pd.DataFrame) -> str:
         "Generated by `study.errata` from `reference/printed_formulas.toml`; do not edit.",
         "",
         "Verdicts: " + ", ".join(f"{v}: {int(counts.get(v, 0))}" for v in VERDICTS) + ".",
-        "`derived` is the form derived from the mechanism description (the corrected form where the verdict is wrong).",
+        "For each formula: as printed (the paper's OCR text), as derived from the mechanism description (the "
+        f"corrected form where the verdict is not exact; terms the printed formula lacks in {DIFFERENCE_COLOR}) "
+        "and, where the two differ, printed − derived.",
         "",
-        "| formula | equation | verdict | printed | derived | note |",
-        "|---|---|---|---|---|---|",
+        md_table(["formula", "equation", "verdict", "form", "expression", "note"], rows),
     ]
-    for row in df.itertuples(index=False):
-        lines.append("| " + " | ".join([cell(row.formula), cell(row.equation), cell(row.verdict),
-                                        cell(row.printed, True), cell(row.derived, True), cell(row.note)]) + " |")
     return "\n".join(lines) + "\n"
 
 

@@ -1,12 +1,15 @@
 """The command line: simulate writes a result and a one-line summary; bad input is named."""
 
+import importlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from study import SimulationResult
 from study.cli import main
+from study.reference_data import tolerance
 
 
 def test_simulate_writes_result(tmp_path, capsys):
@@ -24,10 +27,105 @@ def test_simulate_writes_result(tmp_path, capsys):
     (["--integrator", "Euler"], "invalid choice: 'Euler'"),
     (["--rtol", "0"], "rtol = 0.0 must be finite and > 0"),
     (["--t-end", "-1"], "t_end = -1.0 must be finite and > 0"),
-    (["--case", "nope"], "unknown variant (valid choices: seed, smooth_cutting, guide_friction)"),
+    (["--variant", "nope"], "unknown variant (valid choices: seed, smooth_cutting, guide_friction)"),
 ])
 def test_simulate_bad_input(tmp_path, args, message):
     proc = subprocess.run([sys.executable, "-m", "study", "simulate", "quick_return", *args, "--out",
                            str(tmp_path / "x")], capture_output=True, text=True)
     assert proc.returncode != 0
     assert message in proc.stderr
+
+
+# --- friction, variant, backend, bench (issue 16) ----------------------------------------------
+def _run(tmp_path, capsys, name, *args):
+    out = tmp_path / name
+    assert main(["simulate", "slider_crank", "--t-end", "0.5", *args, "--out", str(out)]) == 0
+    return SimulationResult.load(out.with_suffix(".csv")), capsys.readouterr().out.strip()
+
+
+def test_simulate_applies_the_parameter_sets_friction_by_default(tmp_path, capsys):
+    default, line = _run(tmp_path, capsys, "default")
+    exact, exact_line = _run(tmp_path, capsys, "exact", "--friction", "exact")
+    none, none_line = _run(tmp_path, capsys, "none", "--friction", "none")
+    assert "friction exact [parameter set's default]" in line
+    assert "friction exact:" in exact_line and "friction none:" in none_line
+    assert default.meta["friction"] == exact.meta["friction"] == "exact" and none.meta["friction"] is None
+    # the default run is the exact run, sample for sample, and not the frictionless one
+    np.testing.assert_array_equal(default.q, exact.q)
+    np.testing.assert_array_equal(default.forces["friction_guide"], exact.forces["friction_guide"])
+    assert "friction_guide" not in none.forces
+    assert np.max(np.abs(default.q - none.q)) > tolerance("cli_friction_effect")
+    # the seed's guide holds the slider (it sticks within milliseconds): friction balances it
+    assert default.forces["stick_guide"][-1] == 1
+
+
+def test_simulate_regularized_friction_options(tmp_path, capsys):
+    wide, line = _run(tmp_path, capsys, "wide", "--friction", "regularized", "--friction-eps", "1e-2",
+                      "--friction-sgn", "arctan")
+    narrow, _ = _run(tmp_path, capsys, "narrow", "--friction", "regularized", "--friction-eps", "1e-4")
+    assert "friction regularized (arctan, eps = 0.01 m/s)" in line
+    assert (wide.meta["friction_eps"], wide.meta["friction_sgn"]) == (1e-2, "arctan")
+    assert (narrow.meta["friction_eps"], narrow.meta["friction_sgn"]) == (1e-4, "tanh")
+    assert np.max(np.abs(wide.q - narrow.q)) > 0  # the width reaches the law
+
+
+def test_simulate_quick_return_seed_has_no_friction_by_default(tmp_path, capsys):
+    out = tmp_path / "qr"
+    assert main(["simulate", "quick_return", "--variant", "smooth_cutting", "--t-end", "0.05", "--out", str(out)]) == 0
+    assert "friction none [parameter set's default]" in capsys.readouterr().out
+    r = SimulationResult.load(out.with_suffix(".csv"))
+    assert r.meta["variant"] == "smooth_cutting" and r.meta["friction"] is None
+
+
+def test_simulate_passes_variant_backend_and_friction(monkeypatch, tmp_path):
+    """--variant and its alias --case, --backend and the friction options reach study.simulate."""
+    seen = []
+
+    def fake(mechanism, **kwargs):
+        seen.append(kwargs)
+        raise ValueError("stop here")
+
+    # the module, not the function study.simulate that the package re-exports under the same name
+    monkeypatch.setattr(importlib.import_module("study.simulate"), "simulate", fake)
+    base = ["simulate", "slider_crank", "--out", str(tmp_path / "x")]
+    assert main(base + ["--variant", "slip_then_stick", "--backend", "compiled", "--friction", "sign",
+                        "--friction-eps", "2e-3"]) == 2
+    assert main(base + ["--case", "sustained_sliding", "--friction", "none"]) == 2
+    assert [(k["variant"], k["backend"], k["friction"], k["friction_eps"]) for k in seen] == [
+        ("slip_then_stick", "compiled", "sign", 2e-3), ("sustained_sliding", "reference", None, 1e-3)]
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--friction", "magic"], "invalid choice: 'magic'"),
+    (["--backend", "gpu"], "invalid choice: 'gpu'"),
+    (["--friction", "regularized", "--friction-eps", "0"], "friction_eps = 0.0 must be finite and > 0"),
+])
+def test_simulate_bad_friction_or_backend(tmp_path, args, message):
+    proc = subprocess.run([sys.executable, "-m", "study", "simulate", "slider_crank", "--t-end", "0.1", *args,
+                           "--out", str(tmp_path / "x")], capture_output=True, text=True)
+    assert proc.returncode != 0
+    assert message in proc.stderr
+
+
+def test_every_command_help_shows_an_example(capsys):
+    from study.cli import EXAMPLES, build_parser
+
+    commands = set(build_parser()._subparsers._group_actions[0].choices)
+    assert commands == set(EXAMPLES) and "bench" in commands
+    for command, example in EXAMPLES.items():
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = capsys.readouterr().out
+        assert f"example:\n  {example}" in text
+        assert example.split()[3] == command  # the example runs this command
+
+
+def test_bench_subcommand_runs_the_benchmark(monkeypatch, tmp_path):
+    """`study bench` parses the benchmark's own options and runs it (python -m study.bench does the same)."""
+    import study.bench
+
+    seen = []
+    monkeypatch.setattr(study.bench, "run", lambda args: seen.append(args) or 0)
+    assert main(["bench", "--quick", "--skip-compile", "--out", str(tmp_path)]) == 0
+    assert study.bench.main(["--quick", "--out", str(tmp_path)]) == 0
+    assert [(a.quick, a.skip_compile, a.out) for a in seen] == [(True, True, tmp_path), (True, False, tmp_path)]

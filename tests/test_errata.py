@@ -309,3 +309,44 @@ def test_write_errata(tmp_path, table):
 def test_main_writes_to_the_given_folder(tmp_path, capsys):
     assert errata.main(["--out", str(tmp_path)]) == 0
     assert (tmp_path / "errata.csv").exists() and "001.h" in capsys.readouterr().out
+
+
+# --- typeset forms (issue 16) ------------------------------------------------------------------
+def _marked(tex: str) -> list[str]:
+    """The LaTeX groups marked as differing: {\\color{<DIFFERENCE_COLOR>}...} with balanced braces."""
+    opening, found, start = "{\\color{" + errata.DIFFERENCE_COLOR + "}", [], 0
+    while (start := tex.find(opening, start)) >= 0:
+        depth, k = 0, start
+        while True:
+            depth += {"{": 1, "}": -1}.get(tex[k], 0)
+            if depth == 0:
+                break
+            k += 1
+        found.append(tex[start + len(opening):k])
+        start = k
+    return found
+
+
+def test_latex_forms_mark_exactly_the_misprinted_terms(table):
+    rows = table.set_index("formula")
+    assert all(rows["derived_latex"].str.len() > 0)
+    exact = rows[rows["verdict"] == EXACT]
+    assert not any(_marked(t) for t in exact["derived_latex"]) and all(exact["difference_latex"] == "")
+    # hand-read misprints (see EXPECTED): the derived term the printed formula lacks is marked, nothing else
+    assert _marked(rows.loc["000.a22", "derived_latex"]) == ["c_{2}^{2} m_{2}"]       # m2 c2 l1 for m2 c2^2
+    assert _marked(rows.loc["000.a11", "derived_latex"]) == ["l_{1}^{2} m_{2}"]       # l2^2 for l1^2 (rod)
+    assert _marked(rows.loc["000.a12", "derived_latex"]) == ["J_{2}"]                 # J3 for J2
+    assert _marked(rows.loc["000.xB_dot", "derived_latex"]) == [
+        r"l_{2} \dot{q}_{2} \sin{\left(q_{1} + q_{2} \right)}"]                       # sin q1 for sin(q1+q2)
+    assert _marked(rows.loc["000.q0", "derived_latex"]) == ["-0.473578"]              # q2(0) off the guide
+    assert rows.loc["000.a12", "difference_latex"] == "- J_{2} + J_{3}"
+
+
+def test_latex_forms_typeset(table):
+    """Every printed and derived form (and every difference) converts to MathML."""
+    from latex2mathml.converter import convert
+
+    for column in ("printed", "derived_latex", "difference_latex"):
+        for tex in table[column]:
+            if tex:
+                assert convert(tex).startswith("<math")

@@ -4,13 +4,15 @@ from a tiny pipeline run, with every quoted number equal to the saved table's.""
 import hashlib
 import json
 import os
+import re
 
 import pandas as pd
 import pytest
 
 from study import pipeline as pl
 from study.report import build_report
-from study.report.render import markdown_to_html, md_table
+from study import errata
+from study.report.render import markdown_to_html, md_math, md_table, number_figures
 from tiny_cases import TINY
 
 
@@ -106,11 +108,54 @@ def test_report_without_saved_runs(tmp_path, saved):
 def test_markdown_to_html_subset():
     md = "# T\n\nSome `x*y` and **bold** [link](a.csv).\n\n" + md_table(["a", "b"], [["1|2", "3"]], [False, True])
     html = markdown_to_html(md + "\n\n- one\n- two\n", lambda src: src, "t")
-    assert "<h1>T</h1>" in html and "<code>x*y</code>" in html and "<strong>bold</strong>" in html
+    assert '<h1 id="t">T</h1>' in html and "<code>x*y</code>" in html and "<strong>bold</strong>" in html
     assert '<a href="a.csv">link</a>' in html and "<td>1|2</td>" in html and '<td style="text-align:right">3</td>' in html
     assert "<li>one</li>" in html
+    assert '<div class="table-wrap">\n<table>' in html  # wide tables scroll in their container
     with pytest.raises(ValueError, match="expected 2"):
         md_table(["a", "b"], [["1"]])
+
+
+def test_markdown_to_html_links_math_toc_figures_footnotes():
+    md = number_figures("# Report\n\nSee [`manifest.json`](manifest.json) and <b>raw</b>.[^n]\n\n"
+                        "## First part\n\n### Detail\n\n![max |Φ| of *every* run](figures/a.png)\n\n"
+                        "## Second part\n\n" + md_table(["f", "math"], [["x", md_math(r"\frac{a}{b} + |q_1|")]])
+                        + "\n\n$$E = m c^2$$\n\n[^n]: a footnote\n")
+    assert "*Figure 1.* max |Φ| of *every* run" in md  # numbered caption, readable in index.md too
+    html = markdown_to_html(md, lambda src: "data:image/png;base64,AAAA", "t")
+    body = html[html.index("<body>"):]
+    assert '<a href="manifest.json"><code>manifest.json</code></a>' in body and "](" not in body
+    assert "&lt;b&gt;raw&lt;/b&gt;" in body  # raw HTML is escaped, never passed through
+    toc = body[body.index('<nav class="toc"'):body.index("</nav>")]
+    assert [href for href in re.findall(r'href="#([^"]+)"', toc)] == ["first-part", "detail", "second-part"]
+    assert body.index("</nav>") < body.index('<h2 id="first-part">')
+    assert re.search(r'<figure id="figure-1"><img src="data:image/png;base64,AAAA" alt="max \|Φ\| of every run" />'
+                     r"<figcaption><em>Figure 1\.</em> max \|Φ\| of <em>every</em> run</figcaption>", body)
+    assert body.count("<math ") == 2 and 'display="block"' in body and "<mfrac>" in body
+    assert "$" not in re.sub(r"<math.*?</math>", "", body, flags=re.S)
+    assert 'class="footnote-ref"' in body and "a footnote" in body
+
+
+def test_markdown_to_html_marks_unreadable_math():
+    html = markdown_to_html("a $x^$ b and $\\left( y$\n", lambda src: src, "t")
+    assert html.count('class="math-error"') == 2 and "<code" in html and "x^" in html and "<math" not in html
+
+
+def test_report_html_typesets_the_errata(saved, tmp_path):
+    """The errata table's printed and derived formulas (and their difference) become MathML."""
+    reports, cache, cases = saved
+    frame = pd.DataFrame([{"formula": "000.a22", "paper": "000", "equation": "000 eq. (14)", "verdict": "wrong",
+                           "printed": r"a_{22} = m_2 c_2 l_1 + m_3 l_2^2 + J_2", "derived": "J2 + c2**2*m2 + l2**2*m3",
+                           "derived_latex": r"J_{2} + {\color{crimson}c_{2}^{2} m_{2}} + l_{2}^{2} m_{3}",
+                           "difference_latex": r"c_{2} m_{2} \left(- c_{2} + l_{1}\right)", "note": "m2*c2 |x|"}])
+    (reports / "tables" / "errata.md").write_text(errata._markdown(frame))
+    build_report(reports, cache, cases)
+    html = (reports / "report.html").read_text()
+    section = html[html.index('<h2 id="errata">'):html.index("<h2", html.index('<h2 id="errata">') + 5)]
+    assert section.count("<math ") == 3 and 'mathcolor="crimson"' in section
+    assert "<msub><mi>a</mi><mrow><mn>22</mn></mrow></msub>" in section
+    assert "m2*c2 |x|" in section and "](" not in section
+    assert '<nav class="toc"' in html and 'href="#errata"' in html
 
 
 def test_claims_verdicts_follow_the_tables(tmp_path, saved):

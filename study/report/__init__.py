@@ -5,8 +5,9 @@
 (``reports/tables``, ``reports/timing``) and the pipeline's saved runs, and writes
 
 - ``reports/figures/*.png`` and ``*.svg``;
-- ``reports/index.md``: the report, readable on a code host;
-- ``reports/report.html``: the same text as one self-contained page (figures as base64 PNG);
+- ``reports/index.md``: the report, readable on a code host (figures numbered, formulas as ``$...$``);
+- ``reports/report.html``: the same text as one self-contained page (figures as base64 PNG, formulas
+  as MathML, a table of contents; no JavaScript, nothing fetched);
 - ``reports/manifest.json``: package versions, Python version, git commit, platform, the input hash
   of every case, the wall time of every stage of the last pipeline run, and every input and output
   file with its SHA-256.
@@ -28,7 +29,7 @@ import pandas as pd
 
 from study.pipeline import CASES_DIR, PIPELINE_RECORD, Store, load_case_lists
 from study.report.context import ReportContext
-from study.report.render import markdown_to_html, md_table, png_data_uri
+from study.report.render import markdown_to_html, md_table, number_figures, png_data_uri
 from study.results import package_versions
 
 __all__ = ["SECTIONS", "build_report"]
@@ -143,7 +144,7 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     lines += _failed_section(ctx)
     lines += _other_tables_section(reports_dir / "tables", {p.name for p in ctx.inputs})
     lines += _provenance_section(manifest)
-    markdown = "\n".join(lines).rstrip() + "\n"
+    markdown = number_figures("\n".join(lines).rstrip() + "\n")
 
     index = reports_dir / "index.md"
     index.write_text(markdown, encoding="utf-8")
