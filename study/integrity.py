@@ -90,3 +90,30 @@ def read_json(path: Path) -> dict:
     if not isinstance(data, dict):
         raise ResultIntegrityError(f"{path}: expected a JSON object, got {type(data).__name__}")
     return data
+
+
+class RegeneratedWarning(UserWarning):
+    """A cached generated file failed its checksum and was generated again."""
+
+
+def ensure_generated(path: Path, generate) -> str | None:
+    """Make ``path`` hold generated code whose checksum entry matches; returns why it was (re)generated.
+
+    A missing file is generated; a file that fails :func:`verify_checked` (edited, cut, or from a
+    version without checksums) is reported with a :class:`RegeneratedWarning` and generated again,
+    never used. ``generate()`` returns the source text.
+    """
+    import warnings
+
+    path = Path(path)
+    if path.exists():
+        try:
+            verify_checked(path)
+            return None
+        except ResultIntegrityError as exc:
+            why = str(exc)
+            warnings.warn(f"generated code rejected and regenerated: {why}", RegeneratedWarning, stacklevel=2)
+    else:
+        why = "not generated yet"
+    write_checked(path, generate())
+    return why

@@ -155,10 +155,10 @@ def simulate(
         raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
     check_run_size(eom, q0, qd0, float(t_end), integrator, step, output_step, friction, max_evaluations,
                    max_output_bytes)
-    if check:
-        validate_equations(eom, q0, qd0)
     monitor = SingularityMonitor(eom, q0)
     monitor.check(0.0, q0)  # a singular start is refused even with check=False: nothing is determined there
+    if check:
+        validate_equations(eom, q0, qd0)
     if backend == "compiled":
         from study.fast import simulate_compiled
 

@@ -93,22 +93,31 @@ class SingularityMonitor:
         self.scale = jacobian_scale(eom, np.asarray(q0, dtype=float))
         self.ratio = tolerance("singular_ratio") if ratio is None else ratio
         self.smallest = np.inf
+        self._last: tuple[float, Array] | None = None
 
     def measure(self, q: Array) -> float:
         return singularity_measure(np.asarray(self.eom.phi_q(q), dtype=float), self.scale)
 
     def check(self, t: float, q: Array) -> None:
+        """Raise SingularConfigurationError if rho(q) < ratio, or if the step since the last call crossed a
+        singular pose: det(J J_last^T) <= 0 (the constraints' row space turned over, which a small step
+        does only by passing through a rank drop; a step can jump over the pose itself)."""
         if self.eom.n_constraints == 0:
             return
-        rho = self.measure(q)
+        J = np.asarray(self.eom.phi_q(q), dtype=float)
+        rho = singularity_measure(J, self.scale)
         self.smallest = min(self.smallest, rho)
-        if not rho >= self.ratio:
+        crossed = self._last is not None and not np.linalg.det(J @ self._last[1].T) > 0
+        if not rho >= self.ratio or crossed:
+            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s (the Jacobian's rows turned over), now at"
+                     if crossed and rho >= self.ratio else f"at t = {t:.9g} s,")
             raise SingularConfigurationError(
-                f"{self.eom.name}: singular configuration at t = {t:.9g} s, q = {_fmt(q)}: the constraint Jacobian "
-                f"Phi_q is (nearly) rank-deficient, sigma_min / scale = {rho:.3g} < {self.ratio:g} "
-                f"(reference/tolerances.toml: singular_ratio); accelerations and multipliers are not determined "
+                f"{self.eom.name}: singular configuration {where} q = {_fmt(q)}: the constraint Jacobian "
+                f"Phi_q is (nearly) rank-deficient, sigma_min / scale = {rho:.3g} (singular below {self.ratio:g}, "
+                f"reference/tolerances.toml: singular_ratio); accelerations and multipliers are not determined "
                 f"there (a dead centre, or links aligned)", t=float(t), quantity="Phi_q", pose=list(map(float, q)),
                 measure=rho)
+        self._last = (float(t), J)
 
 
 def _fmt(x) -> str:
@@ -127,8 +136,9 @@ def _evaluate(name: str, call: Callable[[], Array], problems: list[str]) -> Arra
     return value
 
 
-def _relative(a: Array, b: Array) -> float:
-    scale = max(float(np.max(np.abs(a), initial=0.0)), float(np.max(np.abs(b), initial=0.0)))
+def _relative(a: Array, b: Array, floor: float = 0.0) -> float:
+    """max|a - b| relative to the largest entry of a, b (or ``floor``, the quantity's scale, if larger)."""
+    scale = max(float(np.max(np.abs(a), initial=0.0)), float(np.max(np.abs(b), initial=0.0)), floor)
     diff = float(np.max(np.abs(a - b), initial=0.0))
     return diff / scale if scale > 0 else 0.0
 
@@ -160,10 +170,11 @@ def validate_equations(eom: EquationsOfMotion, q0: Array, qd0: Array, t0: float 
                 problems.append(f"mass(q0) is not positive-definite: smallest eigenvalue {eig.min():.6g} "
                                 f"(every eigenvalue must be > 0)")
     tol = tolerance("equations_check")
+    scale = jacobian_scale(eom, q0) if J is not None and eom.n_constraints else 1.0
     if phi is not None and J is not None and eom.n_constraints:
         fd = _evaluate("phi near q0", lambda: numeric_jacobian(eom.phi, q0), problems)
         if fd is not None:
-            err = _relative(J, fd)
+            err = _relative(J, fd, scale)
             if err > tol:
                 i, j = np.unravel_index(np.argmax(np.abs(J - fd)), J.shape)
                 problems.append(f"phi_q(q0) is not the Jacobian of phi: entry ({i}, {j}) is {J[i, j]:.9g}, the "
@@ -175,7 +186,8 @@ def validate_equations(eom: EquationsOfMotion, q0: Array, qd0: Array, t0: float 
             fd = _evaluate("phi_q near q0", lambda qd=qd: numeric_gamma(eom, q0, qd), problems)
             if g is None or fd is None:
                 continue
-            err = _relative(g, fd)
+            # gamma ~ (second derivative of Phi) |qd|^2, and the second derivative ~ scale / |q0|
+            err = _relative(g, fd, scale / max(float(np.linalg.norm(q0)), _step(q0)) * float(qd @ qd))
             if err > tol:
                 problems.append(f"gamma(q0, qd) at {label} is {_fmt(g)}, its definition -(Phi_q qd)_q qd gives "
                                 f"{_fmt(fd)} (relative difference {err:.3g} > {tol:g}, equations_check)")
@@ -192,9 +204,10 @@ def validate_equations(eom: EquationsOfMotion, q0: Array, qd0: Array, t0: float 
         if vel_scale > 0 and vel > res * vel_scale:
             problems.append(f"qd0 = {_fmt(qd0)} violates the velocity constraints: max|Phi_q qd0| = {vel:.6g} is "
                             f"{vel / vel_scale:.3g} of |Phi_q| |qd0| (allowed {res:g}, initial_state_residual)")
-        if any("off the constraints" in p or "velocity constraints" in p for p in problems):
-            problems.append("make the state consistent with study.solver.initial.consistent_initial_conditions "
-                            "(or pass check=False to run from it anyway)")
+        if problems:
+            hint = ("; make the state consistent with study.solver.initial.consistent_initial_conditions "
+                    "(or pass check=False to run from it anyway)")
+            raise EquationsError(_message(eom, problems) + hint, tuple(problems))
     if problems:
         raise EquationsError(_message(eom, problems), tuple(problems))
 
@@ -222,7 +235,8 @@ def diagnose_non_finite(eom: EquationsOfMotion, t: float, q: Array, qd: Array, r
     for name, call in calls:
         value = np.asarray(call(), dtype=float)
         if not np.all(np.isfinite(value)):
-            cause = (f"max|q|, |qd| = {big:.3g}: if that is far from the motion's size, {step_hint}; otherwise "
+            cause = (f"{name.split('(')[0]} returns non-finite values at the start of the run (check that callable)"
+                     if t == 0 else f"max|q|, |qd| = {big:.3g}: if that is far from the motion's size, {step_hint}; otherwise "
                      f"{name.split('(')[0]} itself returns non-finite values there (check that callable)")
             return NonFiniteError(f"{where}: {name} = {_fmt(value)} at q = {_fmt(q)}, qd = {_fmt(qd)}; {cause}",
                                   t=t, quantity=name.split("(")[0])
