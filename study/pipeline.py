@@ -448,7 +448,10 @@ def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Ex
             from distributed import Client
         except ImportError as exc:  # the extra is optional; say how to get it
             raise RuntimeError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        try:
+            client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        except OSError as exc:  # unreachable or refusing: name the address, no traceback
+            raise OSError(f"scheduler {scheduler!r} cannot be reached: {exc}") from None
         try:
             yield client.get_executor(pure=False)
         finally:

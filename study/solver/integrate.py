@@ -231,8 +231,14 @@ def integrate(
                 g_new = np.asarray(indicators(solver.t, solver.y))
                 flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
                 if flipped:
-                    roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
-                                     xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
+                    try:
+                        roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
+                                         xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
+                    except ValueError as exc:  # no sign change on the step's interpolant: it is not resolved
+                        raise stop(f"the switch of switching function(s) {flipped} cannot be located within the "
+                                   f"step from t = {t_old:.9g} s ({exc}): the step h = {solver.t - t_old:.3g} s is too "
+                                   f"large for the solution (use a smaller step or an adaptive integrator)",
+                                   solver.t, solver.y, solver.t - t_old) from None
                     t_e, i_e = min(roots)
                     sample(dense, t_old, t_e, False)
                     y_cur = dense(t_e)
