@@ -69,9 +69,12 @@ def _run(args: argparse.Namespace) -> int:
     _writable(args.out, "--out", folder=True)
     try:
         record = run_pipeline(args.out, cache_dir(), studies=args.studies or None,
-                              workers=args.workers or environment_workers(), scheduler=args.scheduler,
-                              folder=args.cases, record_root=_record_root(args))
-    except (CaseListError, ValueError) as exc:
+                              workers=environment_workers() if args.workers is None else args.workers,
+                              scheduler=args.scheduler, folder=args.cases, record_root=_record_root(args))
+    except CaseListError as exc:
+        print(f"error: --cases {args.cases}: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     failed = {s: r["failed"] for s, r in record["studies"].items() if r["failed"]}
