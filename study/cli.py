@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -62,23 +64,26 @@ def _simulate(args: argparse.Namespace) -> int:
     for item in args.option or []:
         key, _, value = item.partition("=")
         if not value:
-            raise SystemExit(f"--option {item!r}: expected KEY=VALUE (e.g. omega=10 or sgn=tanh)")
+            raise ValueError(f"--option {item!r}: expected KEY=VALUE (e.g. omega=10 or sgn=tanh)")
         try:
             options[key] = float(value)
         except ValueError:
             options[key] = value
-    try:
-        friction = args.friction
-        if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-            friction = default_friction(resolve(args.mechanism, args.variant)[0]) or "none"
-        result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
-                          integrator=args.integrator, rtol=args.rtol, atol=args.atol, step=args.step,
-                          acceleration_solver=args.acceleration_solver, backend=args.backend,
-                          friction=None if friction == "none" else friction, friction_eps=args.friction_eps,
-                          friction_sgn=args.friction_sgn, **options)
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    if args.integrator == "RK4" and (args.rtol is not None or args.atol is not None):
+        raise ValueError("--rtol/--atol do not apply to --integrator RK4 (fixed step; give --step)")
+    tolerances = {k: v for k, v in (("rtol", args.rtol), ("atol", args.atol)) if v is not None}
+    if args.max_evaluations is not None:
+        options["max_evaluations"] = args.max_evaluations
+    _writable(args.out, "--out")
+    friction = args.friction
+    if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
+        friction = default_friction(resolve(args.mechanism, args.variant)[0]) or "none"
+    result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
+                      integrator=args.integrator, step=args.step, acceleration_solver=args.acceleration_solver,
+                      backend=args.backend, friction=None if friction == "none" else friction,
+                      friction_eps=args.friction_eps, friction_sgn=args.friction_sgn,
+                      progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None,
+                      **tolerances, **options)
     path = result.save(args.out)
     s = result.summary()
     print(f"{args.mechanism}/{args.variant} {args.method} {args.integrator} ({args.backend}), "
@@ -98,18 +103,71 @@ def _run(args: argparse.Namespace) -> int:
     from study.model.compile import cache_dir
     from study.pipeline import CaseListError, environment_workers, run_pipeline
 
+    _writable(args.out, "--out", folder=True)
     try:
         record = run_pipeline(args.out, cache_dir(), studies=args.studies or None,
-                              workers=args.workers or environment_workers(), scheduler=args.scheduler,
-                              folder=args.cases)
-    except (CaseListError, ValueError) as exc:
+                              workers=environment_workers() if args.workers is None else args.workers,
+                              scheduler=args.scheduler, folder=args.cases, record_root=_record_root(args))
+    except CaseListError as exc:
+        print(f"error: --cases {args.cases}: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     failed = {s: r["failed"] for s, r in record["studies"].items() if r["failed"]}
     for study, cases in failed.items():
         for name, error in cases.items():
             print(f"FAILED {name}: {error}", file=sys.stderr)
-    return 1 if failed else 0
+    broken = {s: r["summary_error"] for s, r in record["studies"].items() if r.get("summary_error")}
+    return 1 if failed or broken else 0
+
+
+def _record_root(args: argparse.Namespace) -> Path:
+    """Where a pipeline run keeps its record: the cache root for reference/cases; for another case folder
+    its own --out (required: the default reports/ holds the tables of reference/cases, tracked in git)."""
+    from study.model.compile import cache_dir
+
+    if Path(args.cases).resolve() == CASES_DIR.resolve():
+        return cache_dir()
+    if Path(args.out).resolve() == REPORTS.resolve():
+        raise ValueError(f"--cases {args.cases} is not the default case folder: give it its own --out "
+                         f"(the default {REPORTS}/ holds the tracked tables of {CASES_DIR.name}/)")
+    return Path(args.out) / ".pipeline"
+
+
+def _writable(path: Path, argument: str, folder: bool = False) -> None:
+    """A ValueError naming the argument unless the output folder (``path`` itself if ``folder``, else its
+    parent) exists and is writable, or can be created."""
+    folder = Path(path) if folder else Path(path).parent
+    existing = next((p for p in [folder, *folder.parents] if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        raise ValueError(f"{argument} {path}: {existing} is a file, not a folder")
+    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{argument} {path}: no permission to write in {existing}")
+    try:  # what access() cannot tell (a read-only or virtual file system, root's permissions)
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{argument} {path}: cannot write in {existing} ({exc.strerror or exc})") from None
+
+
+class ProgressPrinter:
+    """``progress=`` for long CLI runs: a line on stderr every few seconds once a run has taken a few seconds."""
+
+    def __init__(self, t_end: float, stream=None):
+        from study.reference_data import tolerance
+
+        self.t_end, self.stream = t_end, stream or sys.stderr
+        self.start = time.perf_counter()
+        self.after, self.interval = tolerance("cli_progress_after"), tolerance("cli_progress_interval")
+        self.next = self.start + self.after
+
+    def __call__(self, t: float) -> None:
+        now = time.perf_counter()
+        if now >= self.next:
+            self.next = now + self.interval
+            print(f"t = {t:.6g} of {self.t_end:g} s ({100 * t / self.t_end:.1f} %), {now - self.start:.0f} s",
+                  file=self.stream, flush=True)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -121,24 +179,24 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from study.model.compile import cache_dir
     from study.pipeline import PIPELINE_RECORD, save_record
 
+    record_root = _record_root(args)
     stages = {}
     code = 0
     for name, step in (("initial", _initial), ("errata", _errata), ("run", _run), ("report", _report)):
         if name == "report":  # the manifest shows the wall time of every stage before the report
-            record_path = cache_dir() / PIPELINE_RECORD
+            record_path = record_root / PIPELINE_RECORD
             record = json.loads(record_path.read_text())
             record["stages"].update({k: stages[k] for k in ("initial", "errata")})
-            save_record(record, cache_dir())
+            save_record(record, record_root)
         t0 = time.perf_counter()
         code = step(args) or code
         stages[name] = time.perf_counter() - t0
         if code and not (name == "run" and code == 1):  # failed cases (1) are reported; errors stop
             return code
     print("wall time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items()), file=sys.stderr)
-    print(f"(details per study: {cache_dir() / PIPELINE_RECORD})", file=sys.stderr)
+    print(f"(details per study: {record_root / PIPELINE_RECORD})", file=sys.stderr)
     print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
     return code
 
@@ -189,7 +247,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
     p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
     p.add_argument("--backend", default="reference", choices=list(BACKENDS),
-                   help="reference: Python + scipy (default); compiled: numba (built-in mechanisms)")
+                   help="reference: Python + scipy (default); compiled: numba (described mechanisms)")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
                    help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
                         "stick/slip where a contact has friction, else none)")
@@ -197,8 +255,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="regularization width [m/s] of 'regularized', stick band of 'sign' (default 1e-3)")
     p.add_argument("--friction-sgn", default="tanh", choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
                    help="smooth sgn of 'regularized' (default tanh)")
-    p.add_argument("--rtol", type=float, default=1e-8)
-    p.add_argument("--atol", type=float, default=1e-10)
+    p.add_argument("--rtol", type=float, default=None, help="relative tolerance (adaptive integrators; default 1e-8)")
+    p.add_argument("--atol", type=float, default=None, help="absolute tolerance (adaptive integrators; default 1e-10)")
+    p.add_argument("--max-evaluations", type=float, default=None,
+                   help="bound on evaluations (default in reference/tolerances.toml); confirms a large fixed-step run")
     p.add_argument("--step", type=float, default=None, help="fixed step h (RK4)")
     p.add_argument("--t-end", type=float, default=20.0)
     p.add_argument("--option", action="append", metavar="KEY=VALUE",
@@ -220,8 +280,30 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run a command. A user error or a failed run is one line on stderr and exit code 2 (1 for a run
+    that failed); ``STUDY_TRACEBACK=1`` shows the traceback instead."""
+    from study.errors import SimulationError
+    from study.solver.friction import PainleveError
+    from study.solver.initial import InitialConditionError
+
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except (SimulationError, PainleveError, InitialConditionError) as exc:
+        if os.environ.get("STUDY_TRACEBACK"):
+            raise
+        print(f"error: the run failed: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except (ValueError, LookupError, OSError) as exc:  # bad values, names, paths, permissions, scheduler
+        if os.environ.get("STUDY_TRACEBACK"):
+            raise
+        print(f"error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
 
 
 if __name__ == "__main__":

@@ -53,9 +53,11 @@ from typing import Any, Iterable, Iterator, Mapping
 
 import pandas as pd
 
+from study.errors import ResultIntegrityError
+from study.integrity import atomic_write, data_rows, read_json, sha256_text, verify_text
 from study.params import REFERENCE_DIR, load_parameters
 from study.reference_data import tolerance
-from study.results import SimulationResult, atomic_write, package_versions
+from study.results import SimulationResult, package_versions
 
 CASES_DIR = REFERENCE_DIR / "cases"
 ENGINES = ("inhouse", "exudyn")
@@ -79,6 +81,10 @@ class CaseListError(ValueError):
 
 class MissingResult(LookupError):
     """A case has no saved result (not run yet, or it failed)."""
+
+
+class CorruptResult(MissingResult):
+    """A case's saved result failed its check (row count, checksum, JSON): it is not used."""
 
 
 # --- cases ---------------------------------------------------------------------------------------
@@ -291,8 +297,16 @@ def load_case_list(path: Path) -> CaseList:
 
 
 def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:
-    """Every case list in ``folder`` (sorted by name), or only the named studies."""
-    available = {p.stem: p for p in sorted(Path(folder).glob("*.toml"))}
+    """Every case list in ``folder`` (sorted by name), or only the named studies.
+
+    A missing folder, or one without case lists, is a CaseListError (never an empty run).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise CaseListError(f"case folder {folder} does not exist (or is not a folder)")
+    available = {p.stem: p for p in sorted(folder.glob("*.toml"))}
+    if not available:
+        raise CaseListError(f"case folder {folder} holds no case lists (*.toml)")
     chosen = list(available) if studies is None else list(studies)
     missing = [s for s in chosen if s not in available]
     if missing:
@@ -310,7 +324,8 @@ def run_case(case: Case) -> SimulationResult:
         initial = options.pop("initial", "consistent")
         if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
             ps = load_parameters(case.mechanism, case.variant)
-            options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd))
+            # off the constraints on purpose (the study shows what that does): the check would refuse it
+            options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd), check=False)
         elif initial != "consistent":
             raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
         return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
@@ -339,6 +354,7 @@ class Store:
 
     def __init__(self, root: Path):
         self.root = Path(root)
+        self._verified: dict[str, tuple] = {}  # key -> ((mtimes), problem): each file is hashed once
 
     def base(self, case: Case) -> Path:
         return self.root / case.key()
@@ -347,15 +363,43 @@ class Store:
         base = self.base(case)
         return base.with_name(base.name + suffix)
 
+    def problem(self, case: Case) -> str | None:
+        """None if the case has a saved result that passes its check, else why not ('not saved' or the check)."""
+        json_path = self.file(case, ".json")
+        if not json_path.exists():  # the JSON is written last
+            return "not saved"
+        stamp = (json_path.stat().st_mtime_ns, self.file(case, ".csv").stat().st_mtime_ns
+                 if self.file(case, ".csv").exists() else None)
+        cached = self._verified.get(case.key())
+        if cached is not None and cached[0] == stamp:
+            return cached[1]
+        try:
+            SimulationResult.verify(self.base(case))
+            why = None
+        except ResultIntegrityError as exc:
+            why = str(exc)
+        self._verified[case.key()] = (stamp, why)
+        return why
+
     def has(self, case: Case) -> bool:
-        return self.file(case, ".json").exists()  # the JSON is written last
+        """True if the case has a saved result that passes its check (row count, checksum)."""
+        return self.problem(case) is None
 
     def load(self, case: Case) -> SimulationResult:
-        if not self.has(case):
+        why = self.problem(case)
+        if why == "not saved":
             failure = self.failure(case)
             why = f"it failed: {failure['error']}" if failure else "it has not been run"
             raise MissingResult(f"no saved result for case {case.name} ({why})")
-        return SimulationResult.load(self.base(case))
+        if why is not None:
+            raise CorruptResult(f"the saved result of case {case.name} is not used: {why}")
+        return SimulationResult.load(self.base(case), verify=False)  # just verified
+
+    def discard(self, case: Case) -> None:
+        """Remove a saved result that failed its check (so it can never be read)."""
+        for suffix in (".json", ".csv"):
+            self.file(case, suffix).unlink(missing_ok=True)
+        self._verified.pop(case.key(), None)
 
     def save(self, case: Case, result: SimulationResult) -> Path:
         result.meta["case"] = {**case.spec(), "key": case.key(), "labels": dict(case.labels)}
@@ -374,7 +418,12 @@ class Store:
 
     def failure(self, case: Case) -> dict | None:
         path = self._failure_path(case)
-        return json.loads(path.read_text()) if path.exists() else None
+        if not path.exists():
+            return None
+        try:
+            return read_json(path)
+        except ResultIntegrityError as exc:
+            return {"case": case.name, "key": case.key(), "error": f"unreadable failure record ({exc})"}
 
 
 # --- executors and progress ----------------------------------------------------------------------
@@ -403,7 +452,10 @@ def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Ex
             from distributed import Client
         except ImportError as exc:  # the extra is optional; say how to get it
             raise RuntimeError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        try:
+            client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        except OSError as exc:  # unreachable or refusing: name the address, no traceback
+            raise OSError(f"scheduler {scheduler!r} cannot be reached: {exc}") from None
         try:
             yield client.get_executor(pure=False)
         finally:
@@ -455,6 +507,7 @@ class RunSummary:
     cached: int = 0
     computed: int = 0
     failed: dict[str, str] = field(default_factory=dict)
+    rejected: dict[str, str] = field(default_factory=dict)  # saved results that failed their check
     wall_seconds: dict[str, float] = field(default_factory=dict)
 
 
@@ -485,7 +538,17 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     for case in cases:
         unique.setdefault(case.key(), case)
     summary = RunSummary()
-    todo = [c for c in unique.values() if not store.has(c)]
+    stream = stream or sys.stderr
+    todo = []
+    for c in unique.values():
+        why = store.problem(c)
+        if why is None:
+            continue
+        if why != "not saved":  # a damaged result is reported and recomputed, never reused
+            print(f"{c.name}: saved result rejected, recomputing: {why}", file=stream)
+            summary.rejected[c.name] = why
+            store.discard(c)
+        todo.append(c)
     summary.cached = len(unique) - len(todo)
     if not todo:
         return summary
@@ -496,6 +559,7 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
             if worker_code != code_version(case.engine):  # e.g. a Dask worker with another installed copy
                 raise RuntimeError(f"the worker runs code version {worker_code}, this process "
                                    f"{code_version(case.engine)}: its result would be saved under a wrong key")
+            result.check_finite()  # a NaN anywhere is a failed run, never cached as a success
         except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
             error = f"{type(exc).__name__}: {exc}"
             store.record_failure(case, error, "".join(traceback.format_exception(exc)))
@@ -513,10 +577,27 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
 TABLE_FLOAT_FORMAT = "%.6g"  # 6 significant digits: the tables compare across runs byte for byte
 
 
+def summary_function(case_list: CaseList):
+    """The study's ``summarize`` function; CaseListError (naming the file and module) if it cannot be had.
+
+    Called for every case list before any case runs, so a misspelt module costs no computation.
+    """
+    where = f"{case_list.path.name}: [study] summary = {case_list.summary!r}"
+    try:
+        module = importlib.import_module(case_list.summary)
+    except ImportError as exc:
+        raise CaseListError(f"{where} cannot be imported ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 - a module that fails on import is named, not a traceback
+        raise CaseListError(f"{where} fails on import: {type(exc).__name__}: {exc}") from None
+    func = getattr(module, "summarize", None)
+    if not callable(func):
+        raise CaseListError(f"{where} has no function summarize(cases, load)")
+    return func
+
+
 def summarize(case_list: CaseList, store: Store) -> dict[str, pd.DataFrame]:
     """Call the study's ``summarize(cases, load)`` on its saved results."""
-    module = importlib.import_module(case_list.summary)
-    return module.summarize(list(case_list.cases), store.load)
+    return summary_function(case_list)(list(case_list.cases), store.load)
 
 
 def write_tables(tables: Mapping[str, pd.DataFrame], reports_dir: Path) -> list[Path]:
@@ -547,13 +628,22 @@ def failures_table(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame
 
 
 def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
-                 scheduler: str | None = None, folder: Path = CASES_DIR, stream=None) -> dict[str, Any]:
+                 scheduler: str | None = None, folder: Path = CASES_DIR, stream=None,
+                 record_root: Path | None = None) -> dict[str, Any]:
     """Run every study's cases (cached ones are reused), then write their tables.
+
+    Before any case runs, every case list is loaded and its summary module imported and checked.
+    The record of the run (``pipeline_record.json``) and of the tables each study wrote (with their
+    checksums, ``tables/<study>.json``) go to ``record_root`` (default: ``cache_root``); a run of another
+    case folder must give its own, so the default record is never overwritten by it.
 
     Returns a record with the wall time per stage, the counts and the failures (for the manifest).
     """
     stream = stream or sys.stderr
+    record_root = Path(cache_root if record_root is None else record_root)
     case_lists = load_case_lists(folder, studies)
+    for cl in case_lists:
+        summary_function(cl)
     store = Store(Path(cache_root) / "runs")
     record: dict[str, Any] = {"stages": {}, "studies": {}, "case_keys": {}}
     t0 = time.perf_counter()
@@ -562,30 +652,59 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
             ts = time.perf_counter()
             run = run_cases(cl.cases, store, executor, title=cl.study, stream=stream)
             record["studies"][cl.study] = {"cases": len(cl.cases), "cached": run.cached, "computed": run.computed,
-                                           "failed": run.failed}
+                                           "failed": run.failed, "rejected": run.rejected}
             record["stages"][f"run:{cl.study}"] = time.perf_counter() - ts
             record["case_keys"][cl.study] = {c.name: c.key() for c in cl.cases}
     record["stages"]["run"] = time.perf_counter() - t0
     for cl in case_lists:
         ts = time.perf_counter()
-        written = Path(cache_root) / "tables" / f"{cl.study}.json"  # the tables this study wrote last time
+        written = record_root / "tables" / f"{cl.study}.json"  # the tables this study wrote last time
         try:
             tables = summarize(cl, store)
-        except MissingResult as exc:  # a case it needs failed or is missing: say which, go on
-            print(f"{cl.study}: summary skipped: {exc}", file=stream)
-            record["studies"][cl.study]["summary_error"] = str(exc)
-            for path in json.loads(written.read_text()) if written.exists() else []:
+        except Exception as exc:  # noqa: BLE001 - a case it needs failed or is missing, or the summary broke
+            print(f"{cl.study}: summary skipped: {type(exc).__name__}: {exc}", file=stream)
+            record["studies"][cl.study]["summary_error"] = f"{type(exc).__name__}: {exc}"
+            for path in _table_record(written):
                 Path(path).unlink(missing_ok=True)  # no stale table may pass for a current one
+            written.unlink(missing_ok=True)
             continue
         paths = write_tables(tables, reports_dir)
         for path in paths:
             print(f"wrote {path}", file=stream)
         written.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(written, json.dumps([str(p.resolve()) for p in paths]))
+        atomic_write(written, json.dumps({str(p.resolve()): _table_entry(p) for p in paths}, indent=1))
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
-    save_record(record, cache_root)
+    save_record(record, record_root)
     return record
+
+
+def _table_entry(path: Path) -> dict[str, Any]:
+    text = Path(path).read_text()
+    return {"rows": data_rows(text), "sha256": sha256_text(text)}
+
+
+def _table_record(written: Path) -> dict[str, Any]:
+    """The tables a study wrote last time, {path: {rows, sha256}} (older records: a list of paths)."""
+    if not written.exists():
+        return {}
+    try:
+        data = json.loads(written.read_text())
+    except json.JSONDecodeError:
+        return {}
+    return {p: {} for p in data} if isinstance(data, list) else data
+
+
+def read_table(path: Path, record_root: Path) -> pd.DataFrame:
+    """A table written by :func:`run_pipeline`, after checking it against the rows and checksum recorded
+    when it was written (ResultIntegrityError otherwise: a table edited, cut or left over from another run)."""
+    path = Path(path).resolve()
+    for written in sorted((Path(record_root) / "tables").glob("*.json")):
+        entry = _table_record(written).get(str(path))
+        if entry is not None:
+            verify_text(path, path.read_text(), entry.get("rows"), entry.get("sha256"))
+            return pd.read_csv(path)
+    raise ResultIntegrityError(f"{path}: no pipeline record lists this table (not written by the last run)")
 
 
 def save_record(record: Mapping[str, Any], cache_root: Path) -> Path:

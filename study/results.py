@@ -8,10 +8,8 @@ digits, so the round trip is exact) plus a JSON sidecar with statistics and meta
 from __future__ import annotations
 
 import json
-import os
 import platform
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from importlib import metadata as importlib_metadata
 from pathlib import Path
@@ -19,6 +17,9 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
+
+from study.errors import NonFiniteError, ResultIntegrityError
+from study.integrity import atomic_write, data_rows, read_json, sha256_text, verify_text
 
 Array = np.ndarray
 
@@ -79,6 +80,23 @@ class SimulationResult:
                 if np.shape(value) != (n,):
                     raise ValueError(f"{group}[{name!r}] has shape {np.shape(value)}, expected ({n},)")
 
+    def check_finite(self) -> None:
+        """Raise NonFiniteError naming the first sample (time) and quantity that is NaN or infinite."""
+        for name, values in self.series():
+            bad = ~np.isfinite(values)
+            if bad.any():
+                k = int(np.argmax(bad))
+                t = float(self.t[k]) if np.isfinite(self.t[k]) else float("nan")
+                raise NonFiniteError(
+                    f"non-finite {name} = {values[k]!r} at sample {k} (t = {t:.9g} s) of "
+                    f"{self.meta.get('mechanism', self.meta.get('engine', 'a run'))}: a failed run (a step too "
+                    f"large, non-finite forces or a singular matrix), not a result", t=t, quantity=name)
+
+    def series(self):
+        """(column name, (N,) values) of every sampled series, as in the CSV."""
+        for name, values in self.to_dataframe().items():
+            yield name, np.asarray(values, dtype=float)
+
     # --- derived quantities ---------------------------------------------------------------
     def energy_balance(self) -> Array:
         """kinetic + potential - sum of work of non-conservative loads; constant for an exact solution."""
@@ -122,22 +140,41 @@ class SimulationResult:
         """Write ``<path>.csv`` and ``<path>.json`` atomically; returns the CSV path."""
         base = _base(path)
         base.parent.mkdir(parents=True, exist_ok=True)
+        self.check_finite()
+        csv_text = self.to_dataframe().to_csv(index=False, float_format="%.17g", lineterminator="\n")
         sidecar = {
             "shape": {"m": self.q.shape[1], "r": self.lam.shape[1]},
             "energies": list(self.energies),
             "forces": list(self.forces),
             "stats": self.stats,
             "meta": self.meta,
+            "csv": {"rows": data_rows(csv_text), "sha256": sha256_text(csv_text)},
         }
-        csv_text = self.to_dataframe().to_csv(index=False, float_format="%.17g")
         atomic_write(_with(base, ".csv"), csv_text)
         atomic_write(_with(base, ".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
         return _with(base, ".csv")
 
     @classmethod
-    def load(cls, path: str | Path) -> "SimulationResult":
+    def verify(cls, path: str | Path) -> dict:
+        """Check a saved result before reuse; returns its sidecar. ResultIntegrityError names what is wrong.
+
+        The JSON must parse and record the CSV's row count and SHA-256; the CSV must match both
+        (a truncated, cut or edited CSV fails).
+        """
         base = _base(path)
-        side = json.loads(_with(base, ".json").read_text())
+        json_path, csv_path = _with(base, ".json"), _with(base, ".csv")
+        side = read_json(json_path)
+        if not csv_path.exists():
+            raise ResultIntegrityError(f"{csv_path}: missing (its JSON {json_path.name} exists)")
+        record = side.get("csv") if isinstance(side.get("csv"), dict) else {}
+        verify_text(csv_path, csv_path.read_text(), record.get("rows"), record.get("sha256"))
+        return side
+
+    @classmethod
+    def load(cls, path: str | Path, verify: bool = True) -> "SimulationResult":
+        """Read a saved result; with ``verify`` (default) it is checked first (:meth:`verify`)."""
+        base = _base(path)
+        side = cls.verify(base) if verify else json.loads(_with(base, ".json").read_text())
         df = pd.read_csv(_with(base, ".csv"))
         m, r = side["shape"]["m"], side["shape"]["r"]
         data = df.to_numpy()
@@ -170,15 +207,3 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     return value
-
-
-def atomic_write(path: Path, text: str) -> None:
-    """Write to a temporary file in the same folder, then rename: readers never see half a file."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:  # interrupted or failed: leave no temporary file behind
-        Path(tmp).unlink(missing_ok=True)
-        raise

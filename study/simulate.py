@@ -8,8 +8,11 @@ from typing import Callable
 import numpy as np
 
 from study.model.eom import EquationsOfMotion, as_state
+from study.errors import RunTooLargeError
+from study.reference_data import tolerance
 from study.results import SimulationResult, package_versions
 from study.solver.accelerations import make_acceleration_solver
+from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
 from study.solver.integrate import INTEGRATORS, integrate
@@ -67,6 +70,10 @@ def simulate(
     friction_eps: float = 1e-3,
     friction_sgn: str = "tanh",
     backend: str = "reference",
+    check: bool = True,
+    max_evaluations: float | None = None,
+    min_step: float | None = None,
+    max_output_bytes: float | None = None,
     **method_options,
 ) -> SimulationResult:
     """Simulate a constrained mechanism.
@@ -100,6 +107,26 @@ def simulate(
         'reference': the Python solver with scipy's integrators. 'compiled': generated numba code and a
         compiled integration loop (``study.fast``; built-in mechanisms, multiplier solver, RK23/RK45/
         DOP853/RK4); an unsupported combination raises a ValueError naming the option.
+    check : bool
+        Validate the equations and the initial state once before the run (``study.solver.checks``:
+        symmetric positive-definite M(q0), phi_q and gamma against finite differences of phi and
+        phi_q, q0 and qd0 on the constraints); False skips it. A singular pose is refused either way.
+    max_evaluations : float, optional
+        Bound on right-hand-side evaluations (default ``max_evaluations`` in reference/tolerances.toml).
+        A fixed-step run that needs more is refused before it starts, with its estimate.
+    min_step : float, optional
+        Smallest step of an adaptive integrator [s] (default ``min_step_fraction`` * t_end).
+    max_output_bytes : float, optional
+        Bound on the estimated memory of the output (default ``max_output_bytes``).
+
+    Raises
+    ------
+    ValueError
+        A bad argument (named); ``study.errors.EquationsError`` for equations or a state that fail
+        the checks; ``study.errors.RunTooLargeError`` for a run refused by its estimate.
+    study.errors.SimulationError
+        The run failed: non-finite values, a singular configuration, a bound reached (time, quantity
+        and likely cause in the message).
 
     Returns
     -------
@@ -107,12 +134,20 @@ def simulate(
     """
     eom, ps = resolve(eom_or_mechanism, variant)
     for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("step", step),
-                        ("output_step", output_step)):
+                        ("output_step", output_step), ("max_evaluations", max_evaluations), ("min_step", min_step),
+                        ("max_output_bytes", max_output_bytes)):
         _check_positive(name, value)
     if integrator not in INTEGRATORS:
         raise ValueError(f"unknown integrator {integrator!r}; valid choices: {', '.join(INTEGRATORS)}")
     if integrator == "RK4" and step is None:
         raise ValueError("integrator 'RK4' is fixed-step: give step= (the step size h > 0)")
+    min_rtol = tolerance("integrator_min_rtol")
+    if backend == "reference" and integrator != "RK4" and rtol < min_rtol:
+        raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
+                         f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g} (or backend='compiled')")
+    max_evaluations = tolerance("max_evaluations") if max_evaluations is None else max_evaluations
+    max_output_bytes = tolerance("max_output_bytes") if max_output_bytes is None else max_output_bytes
+    min_step = tolerance("min_step_fraction") * float(t_end) if min_step is None else min_step
     if q0 is None or qd0 is None:
         if ps is None:
             raise ValueError("q0 and qd0 are required for a user's EquationsOfMotion")
@@ -125,6 +160,12 @@ def simulate(
     eom.check_shapes(q0, qd0)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
+    check_run_size(eom, q0, qd0, float(t_end), integrator, step, output_step, friction, max_evaluations,
+                   max_output_bytes)
+    monitor = SingularityMonitor(eom, q0)
+    monitor.check(0.0, q0)  # a singular start is refused even with check=False: nothing is determined there
+    if check:
+        validate_equations(eom, q0, qd0)
     if backend == "compiled":
         from study.fast import simulate_compiled
 
@@ -150,10 +191,12 @@ def simulate(
             return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
 
     t_out = output_times(float(t_end), output_step)
+    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator == "RK4" else None)
     cpu0 = time.process_time()
-    traj = integrate(dyn.rhs, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
+    traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
                      step=step, indicators=indicators, post_step=post_step, progress=progress,
-                     switching=switching)
+                     switching=switching, monitor=lambda t, y: monitor.check(t, y[:m]), min_step=min_step,
+                     describe=guard.describe)
     cpu = time.process_time() - cpu0
     nfev = dyn.nfev
 
@@ -194,6 +237,51 @@ def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, m
     dyn = FrictionDynamics(eom, solver, stabilization, work_names, law=law, n_load_modes=n_load)
     y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
     return dyn, y0, StickSlipSwitching(dyn) if law.switched else None
+
+
+def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_end: float, integrator: str,
+                   step: float | None, output_step: float, friction: str | None, max_evaluations: float,
+                   max_output_bytes: float) -> None:
+    """Refuse, before anything is allocated, a run whose output or fixed-step cost exceeds its bounds.
+
+    The output holds ~t_end / output_step samples of 1 + 3m + 3r + 2 + (loads) + 4 (contacts) columns at
+    ``output_bytes_per_value`` each; a fixed-step RK4 run takes 4 evaluations per step. The message gives
+    the estimate and the argument that raises the bound (the user's confirmation).
+    """
+    m, r = eom.n_coordinates, eom.n_constraints
+    n_contacts = len(eom.contacts) if friction is not None else 0
+    columns = 1 + 3 * m + 3 * r + 2 + len(eom.applied_forces(0.0, q0, qd0)) + 4 * n_contacts
+    samples = t_end / output_step + 2
+    nbytes = samples * columns * tolerance("output_bytes_per_value")
+    if not nbytes <= max_output_bytes:
+        raise RunTooLargeError(
+            f"t_end = {t_end:g} s at output_step = {output_step:g} s asks for {samples:.3g} samples of {columns} "
+            f"values, about {_bytes(nbytes)} of memory, above max_output_bytes = {_bytes(max_output_bytes)}: use a "
+            f"larger output_step or a shorter t_end, or pass max_output_bytes= to confirm")
+    if integrator == "RK4":
+        evaluations = 4 * np.ceil(t_end / step) + 1
+        if not evaluations <= max_evaluations:
+            cpu = evaluations * tolerance("seconds_per_evaluation")
+            raise RunTooLargeError(
+                f"RK4 with step = {step:g} s over t_end = {t_end:g} s takes {evaluations / 4:.3g} steps = "
+                f"{evaluations:.3g} evaluations (at least {_duration(cpu)} of CPU, ~{_bytes(nbytes)} of output), "
+                f"above max_evaluations = {max_evaluations:g}: pass max_evaluations={evaluations:.0f} "
+                f"(--max-evaluations) to confirm, or use a larger step")
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} PiB"  # pragma: no cover
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("years", 3.15e7), ("days", 86400.0), ("hours", 3600.0), ("minutes", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
 
 
 def output_times(t_end: float, output_step: float) -> np.ndarray:
@@ -263,4 +351,6 @@ def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) ->
         forces[f"stick_{name}"] = stick[:, j]
     meta = {"coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
             "has_potential": eom.potential_energy is not None}
-    return SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, forces, {}, meta)
+    result = SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, forces, {}, meta)
+    result.check_finite()  # every saved sample: a NaN is a failed run, never a result
+    return result

@@ -19,9 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import os
 import sys
-import tempfile
 from pathlib import Path
 from types import ModuleType
 
@@ -29,6 +27,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from study.fast.cache import SOURCE_HASH, generated_dir
+from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.compile import description_key
 from study.model.derive import SymbolicEquations, derive
@@ -141,13 +140,7 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
         return sys.modules[name]
     folder = generated_dir()
     path = folder / f"{name}.py"
-    if not path.exists():
-        source = generate_source(b)
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(source)
-        os.replace(tmp, path)  # atomic: a concurrent reader never sees a half-written file
+    ensure_generated(path, lambda: generate_source(b))  # checksum-verified (issue 14)
     spec = importlib.util.spec_from_file_location(name, Path(path))
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # numba's cache pickles the module name and imports it on reload

@@ -13,7 +13,6 @@ import hashlib
 import importlib.util
 import os
 import re
-import tempfile
 from pathlib import Path
 from types import ModuleType
 
@@ -21,6 +20,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
 from study.model.eom import EquationsOfMotion, SlidingContact
@@ -145,13 +145,7 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
     key = description_key(b)
     folder = cache_dir() / "codegen"
     path = folder / f"{b.name}_{key}.py"
-    if not path.exists():
-        source = generate_source(b, derive(b))
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(source)
-        os.replace(tmp, path)  # atomic: a concurrent reader never sees a half-written file
+    ensure_generated(path, lambda: generate_source(b, derive(b)))  # checksum-verified (issue 14)
     return _load_module(path, key)
 
 

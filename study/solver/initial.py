@@ -11,14 +11,13 @@ from typing import Sequence
 import numpy as np
 
 from study.model.eom import EquationsOfMotion
+from study.reference_data import tolerance
+from study.solver.checks import singular_values
 
 # Newton stops when max|Phi| <= NEWTON_TOL. 1e-13 is a few ulps of the mechanisms' lengths
 # (<= 10 m), the smallest residual double precision can promise for these trigonometric constraints.
 NEWTON_TOL = 1e-13
 NEWTON_MAX_ITER = 50
-# The dependent-coordinate Jacobian Phi_v is called singular above this condition number:
-# beyond ~1e12 a Newton step loses more than 12 of its 16 digits (dead-centre configuration).
-SINGULAR_COND = 1e12
 
 
 class InitialConditionError(RuntimeError):
@@ -79,16 +78,21 @@ def consistent_initial_conditions(
         raise ValueError(f"q_guess must have shape ({m},) and qd_independent ({len(ind)},); "
                          f"got {q.shape} and {qd_ind.shape}")
     history = []
+    singular_ratio = tolerance("singular_ratio")
     for it in range(max_iter + 1):
         phi = eom.phi(q)
         history.append(float(np.max(np.abs(phi))))
-        jac_v = eom.phi_q(q)[:, dep]
-        cond = np.linalg.cond(jac_v)
-        if not cond < SINGULAR_COND:
+        jac = eom.phi_q(q)
+        jac_v = jac[:, dep]
+        # Scale-aware: sigma_min(Phi_v) relative to sigma_max(Phi_q), the whole Jacobian (the condition
+        # number of Phi_v alone is 1 for any 1 x 1 Phi_v, however close to zero it is).
+        sigma = singular_values(jac)
+        ratio = float(singular_values(jac_v).min() / sigma.max()) if sigma.size and sigma.max() > 0 else 0.0
+        if not ratio >= singular_ratio:
             raise InitialConditionError(
-                f"{eom.name}: the dependent Jacobian Phi_q[:, {dep.tolist()}] is singular at q = {q} "
-                f"(condition number {cond:.3g}); a dead-centre configuration or a wrong choice of independent "
-                f"coordinates {ind.tolist()}")
+                f"{eom.name}: the dependent Jacobian Phi_q[:, {dep.tolist()}] is singular at q = {q}: "
+                f"sigma_min(Phi_v) / sigma_max(Phi_q) = {ratio:.3g} < {singular_ratio:g} (singular_ratio); a "
+                f"dead-centre configuration or a wrong choice of independent coordinates {ind.tolist()}")
         if history[-1] <= tol:
             break
         if it == max_iter:

@@ -18,6 +18,8 @@ import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, DenseOutput, OdeSolver, Radau
 from scipy.optimize import brentq
 
+from study.errors import RunBoundError
+
 Array = np.ndarray
 
 
@@ -129,6 +131,9 @@ def integrate(
     post_step: Callable[[Array], tuple[Array, bool]] | None = None,
     progress: Callable[[float], None] | None = None,
     switching=None,
+    monitor: Callable[[float, Array], None] | None = None,
+    min_step: float | None = None,
+    describe: Callable[[float, Array], str] | None = None,
 ) -> Trajectory:
     """Integrate y' = rhs(t, y, mode) from t0 to t_end and sample it at ``t_out``.
 
@@ -151,6 +156,13 @@ def integrate(
         3. ``on_event(t, y, mode, i) -> tuple``, the mode after indicator ``i`` crossed zero at (t, y).
 
         Without it, the mode is the indicators' signs and a crossing flips the crossing entry.
+    monitor : callable (t, y) -> None, optional
+        Called at t0 and after every accepted step; it raises to stop the run (singular pose).
+    min_step : float, optional
+        Smallest step an adaptive method may take before the end of the run; a smaller one stops
+        the run with a :class:`study.errors.RunBoundError` (a stall near a singularity).
+    describe : callable (t, y) -> str, optional
+        Extra text for the error of a failed step (e.g. the singularity measure at that pose).
     """
     if method not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}; valid choices: {', '.join(INTEGRATORS)}")
@@ -188,7 +200,14 @@ def integrate(
             k_out += 1
 
     t, y_cur = float(t0), np.array(y0, dtype=float)
+    if monitor is not None:
+        monitor(t, y_cur)
     sample(None, t, t, True)
+
+    def stop(reason: str, t_now: float, y_now: Array, h: float) -> RunBoundError:
+        extra = describe(t_now, y_now) if describe is not None else ""
+        return RunBoundError(f"{method} stopped at t = {t_now:.9g} s: {reason}" + (f"; {extra}" if extra else ""),
+                             t=float(t_now), quantity="step", step=h)
     options = {"rtol": rtol, "atol": atol} if method != "RK4" else {}
     if step is not None:
         options["first_step"] = step
@@ -200,15 +219,26 @@ def integrate(
             t_old = solver.t
             message = solver.step()
             if solver.status == "failed":
-                raise RuntimeError(f"{method} failed at t = {t_old:.9g}: {message}")
+                raise stop(f"{message} (step size collapsed)", t_old, solver.y, getattr(solver, "h_abs", 0.0))
+            h_taken = solver.t - t_old
+            if min_step is not None and solver.status == "running" and method != "RK4" and h_taken < min_step:
+                raise stop(f"the step h = {h_taken:.3g} s fell below min_step = {min_step:.3g} s (a stall: the "
+                           f"solution is near a singularity or a discontinuity; min_step= overrides)",
+                           solver.t, solver.y, h_taken)
             traj.steps += 1
             dense = solver.dense_output()
             if indicators is not None:
                 g_new = np.asarray(indicators(solver.t, solver.y))
                 flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
                 if flipped:
-                    roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
-                                     xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
+                    try:
+                        roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
+                                         xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
+                    except ValueError as exc:  # no sign change on the step's interpolant: it is not resolved
+                        raise stop(f"the switch of switching function(s) {flipped} cannot be located within the "
+                                   f"step from t = {t_old:.9g} s ({exc}): the step h = {solver.t - t_old:.3g} s is too "
+                                   f"large for the solution (use a smaller step or an adaptive integrator)",
+                                   solver.t, solver.y, solver.t - t_old) from None
                     t_e, i_e = min(roots)
                     sample(dense, t_old, t_e, False)
                     y_cur = dense(t_e)
@@ -233,6 +263,8 @@ def integrate(
                     solver.y = y_new
                     solver.f = solver.fun(solver.t, y_new)
             t, y_cur = solver.t, solver.y
+            if monitor is not None:
+                monitor(t, y_cur)
             if progress is not None:
                 progress(t)
         if not event_hit:

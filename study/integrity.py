@@ -1,0 +1,119 @@
+"""Checksums of files the study writes and later reuses (results, generated code, tables).
+
+A file is reused only when its content still has the SHA-256 (and, for tables, the row count)
+recorded when it was written. Anything else raises :class:`study.errors.ResultIntegrityError`
+naming the file and what differs, so the caller recomputes instead of trusting it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from study.errors import ResultIntegrityError
+
+
+def sha256_text(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def sha256_file(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def data_rows(text: str) -> int:
+    """Rows of a CSV text after its header (complete lines only)."""
+    return max(text.count("\n") - 1, 0)
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write to a temporary file in the same folder, then rename: readers never see half a file."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:  # interrupted or failed: leave no temporary file behind
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _sidecar(path: Path) -> Path:
+    return path.with_name(path.name + ".sha256")
+
+
+def write_checked(path: Path, text: str) -> None:
+    """Write ``text`` and, after it, ``<path>.sha256`` holding its hash (the entry is valid once both exist)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, text)
+    atomic_write(_sidecar(path), sha256_text(text) + "\n")
+
+
+def verify_checked(path: Path) -> None:
+    """Raise ResultIntegrityError unless ``path`` matches the hash written with it by :func:`write_checked`."""
+    path = Path(path)
+    side = _sidecar(path)
+    if not side.exists():
+        raise ResultIntegrityError(f"{path}: no checksum entry {side.name} (written by an older version, or "
+                                   f"interrupted before its checksum)")
+    expected = side.read_text().strip()
+    actual = sha256_file(path)
+    if actual != expected:
+        raise ResultIntegrityError(f"{path}: content changed since it was written (SHA-256 {actual[:12]}..., "
+                                   f"recorded {expected[:12]}...)")
+
+
+def verify_text(path: Path, text: str, rows: int | None, sha256: str | None) -> None:
+    """Raise ResultIntegrityError unless ``text`` (read from ``path``) has the recorded rows and SHA-256."""
+    if rows is None or sha256 is None:
+        raise ResultIntegrityError(f"{path}: no row count and checksum recorded (written by an older version)")
+    got_rows = data_rows(text)
+    if got_rows != rows:
+        raise ResultIntegrityError(f"{path}: {got_rows} data rows, {rows} recorded when it was saved (truncated?)")
+    got = sha256_text(text)
+    if got != sha256:
+        raise ResultIntegrityError(f"{path}: SHA-256 {got[:12]}... differs from the recorded {sha256[:12]}... "
+                                   f"(the file was changed after it was saved)")
+
+
+def read_json(path: Path) -> dict:
+    """A JSON file as a dict; ResultIntegrityError if it is not valid JSON (garbage, half a file)."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ResultIntegrityError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(data, dict):
+        raise ResultIntegrityError(f"{path}: expected a JSON object, got {type(data).__name__}")
+    return data
+
+
+class RegeneratedWarning(UserWarning):
+    """A cached generated file failed its checksum and was generated again."""
+
+
+def ensure_generated(path: Path, generate) -> str | None:
+    """Make ``path`` hold generated code whose checksum entry matches; returns why it was (re)generated.
+
+    A missing file is generated; a file that fails :func:`verify_checked` (edited, cut, or from a
+    version without checksums) is reported with a :class:`RegeneratedWarning` and generated again,
+    never used. ``generate()`` returns the source text.
+    """
+    import warnings
+
+    path = Path(path)
+    if path.exists():
+        try:
+            verify_checked(path)
+            return None
+        except ResultIntegrityError as exc:
+            why = str(exc)
+            warnings.warn(f"generated code rejected and regenerated: {why}", RegeneratedWarning, stacklevel=2)
+    else:
+        why = "not generated yet"
+    write_checked(path, generate())
+    return why
