@@ -73,6 +73,10 @@ class SliderCrankParameters:
     M: float = physical(FINITE, "drive torque on the crank [N m]")
     alpha: float = physical(NONNEGATIVE, "coefficient of the -alpha*q1 (or -alpha*q1dot) crank term")
     alpha_law: str = choice(("spring", "damping"), "reading of '-alpha q1': torsion spring or viscous damper")
+    resistance_reading: str = choice(("holds", "sliding_only"),
+                                     "reading of F at rest: part of the static limit F + mu|N| ('holds') or "
+                                     "acting only while sliding, limit mu|N| ('sliding_only'); "
+                                     "study.solver.friction.RESISTANCE_READINGS")
 
 
 @dataclass(frozen=True)
