@@ -10,7 +10,7 @@ SLOW_PASSED := .cache/slow-tests.passed
 export PYTHONHASHSEED := 0
 SOURCES := $(shell find study tests reference -type f -not -name '*.pyc') pyproject.toml
 
-.PHONY: test reproduce run errata initial report bench browser check-report clean-cache
+.PHONY: test reproduce run errata initial report bench browser check-report clean-cache verify
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -33,6 +33,14 @@ reproduce: $(STAMP)
 $(SLOW_PASSED): $(STAMP) $(SOURCES)
 	$(PY) -m pytest -q -m slow
 	@mkdir -p $(dir $@) && touch $@
+
+# Regenerate every table and compare it with the snapshot in reports/tables (per-column rules and their reasons:
+# reference/verify.toml; prints the worst difference per table; fails on any difference beyond its rule), then the
+# conditioning check: every in-house case rerun from a state moved by +-4 ulps (reports/tables/perturbation_check.csv).
+# With an empty cache (a fresh clone, or after make clean-cache) every case is computed again.
+verify: $(STAMP)
+	$(PY) -m study verify $(if $(WORKERS),--workers $(WORKERS))
+	$(PY) -m study verify --perturb $(if $(WORKERS),--workers $(WORKERS))
 
 run: $(STAMP)
 	$(PY) -m study run $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))

@@ -201,6 +201,15 @@ def _reproduce(args: argparse.Namespace) -> int:
     return code
 
 
+def _verify(args: argparse.Namespace) -> int:
+    from study.model.compile import cache_dir
+    from study.pipeline import environment_workers
+    from study.verify import main_verify
+
+    return main_verify(args.out, cache_dir(), args.studies or None, args.workers or environment_workers(),
+                       args.perturb, args.ulps, args.cases)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m study", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -231,6 +240,19 @@ def build_parser() -> argparse.ArgumentParser:
         p.set_defaults(func=func)
 
     from study.params import available_mechanisms
+    p = sub.add_parser("verify", help="regenerate every table and compare it with reports/tables (reference/verify.toml); "
+                                      "--perturb: rerun every in-house case from a state moved by a few ulps instead")
+    p.add_argument("studies", nargs="*", help="studies to check (default: every case list, plus initial and errata)")
+    p.add_argument("--out", type=Path, default=REPORTS, help="report folder whose tables/ is the snapshot (default: reports)")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: $STUDY_WORKERS or the CPUs)")
+    p.add_argument("--cases", type=Path, default=CASES_DIR, metavar="DIR", help="folder of case lists")
+    p.add_argument("--perturb", action="store_true",
+                   help="the conditioning check: writes <out>/tables/perturbation_check.csv")
+    p.add_argument("--ulps", type=int, action="append", default=None,
+                   help="perturbation of q(0), qd(0) in ulps, repeatable (default: +4 and -4)")
+    p.set_defaults(func=_verify)
+
+    from study.mechanisms import MECHANISMS
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import STABILIZATIONS

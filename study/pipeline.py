@@ -51,6 +51,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping
 
+import numpy as np
 import pandas as pd
 
 from study.errors import ResultIntegrityError
@@ -322,12 +323,20 @@ def run_case(case: Case) -> SimulationResult:
 
         options = case.kwargs
         initial = options.pop("initial", "consistent")
+        ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
         if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
             ps = load_parameters(case.mechanism, case.variant)
             # off the constraints on purpose (the study shows what that does): the check would refuse it
             options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd), check=False)
         elif initial != "consistent":
             raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
+        if ulps:
+            from study.mechanisms import initial_state, load
+
+            if "q0" not in options:
+                state = initial_state(*load(case.mechanism, case.variant))
+                options.update(q0=state.q, qd0=state.qd)
+            options.update({k: np.add(options[k], ulps * np.spacing(np.asarray(options[k], float))) for k in ("q0", "qd0")})
         return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
     from study import exudyn_models
 

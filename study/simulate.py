@@ -69,6 +69,7 @@ def simulate(
     friction: str | None = None,
     friction_eps: float = 1e-3,
     friction_sgn: str = "tanh",
+    resistance_reading: str | None = None,
     backend: str = "reference",
     check: bool = True,
     max_evaluations: float | None = None,
@@ -103,6 +104,10 @@ def simulate(
         'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps`` also sets the
         band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. The result gains
         forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
+    resistance_reading : {None, 'holds', 'sliding_only'}
+        Whether a contact's constant resistance counts in the static limit of the 'exact' treatment
+        (``study.solver.friction.RESISTANCE_READINGS``). None: the parameter set's
+        ``resistance_reading`` if it has one, else 'holds' (``study.model.SlidingContact.resistance``).
     backend : {'reference', 'compiled'}
         'reference': the Python solver with scipy's integrators. 'compiled': generated numba code and a
         compiled integration loop (``study.fast``; built-in mechanisms, multiplier solver, RK23/RK45/
@@ -166,7 +171,12 @@ def simulate(
     monitor.check(0.0, q0)  # a singular start is refused even with check=False: nothing is determined there
     if check:
         validate_equations(eom, q0, qd0)
+    if resistance_reading is None:
+        resistance_reading = getattr(ps.values, "resistance_reading", "holds") if ps is not None else "holds"
     if backend == "compiled":
+        if friction == "exact" and resistance_reading != "holds":
+            raise ValueError(f"backend 'compiled' implements resistance_reading 'holds' only, got "
+                             f"{resistance_reading!r}: use backend='reference'")
         from study.fast import simulate_compiled
 
         return simulate_compiled(eom, ps, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
@@ -176,7 +186,7 @@ def simulate(
 
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
-                                        **method_options)
+                                        resistance_reading=resistance_reading, **method_options)
     stabilization, law = dyn.stabilization, getattr(dyn, "law", None)
     m = eom.n_coordinates
     indicators = None
@@ -221,13 +231,14 @@ def simulate(
 
 def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, method: str,
                    acceleration_solver: str, friction: str | None, friction_eps: float, friction_sgn: str,
-                   **method_options) -> tuple[Dynamics, np.ndarray, StickSlipSwitching | None]:
+                   resistance_reading: str = "holds", **method_options) -> tuple[Dynamics, np.ndarray, StickSlipSwitching | None]:
     """A run's dynamics (with friction: a FrictionDynamics), its initial state y0 and its stick/slip rule.
 
     y0 = [q0, qd0, 0 for the work of every applied load (and of every contact's friction)].
     """
     stabilization = make_stabilization(method, **method_options)
-    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn)
+    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn,
+                                                      resistance_reading=resistance_reading)
     work_names = tuple(eom.applied_forces(0.0, q0, qd0))
     solver = make_acceleration_solver(acceleration_solver)
     if law is None:

@@ -16,7 +16,7 @@ from study.params import ParameterSet
 
 LABEL = "slider-crank (paper 000)"
 #: Parameters the description reads (the order fixes the generated code's parameter layout).
-PARAMETERS = ("J1", "m1", "J2", "m2", "m3", "J3", "l1", "l2", "c2", "g", "mu", "F", "alpha", "M", "alpha_law")
+PARAMETERS = ("J1", "m1", "J2", "m2", "m3", "J3", "l1", "l2", "c2", "g", "mu", "F", "alpha", "M", "alpha_law", "resistance_reading")
 
 
 def describe(ps: ParameterSet) -> Description:

@@ -32,6 +32,16 @@ Treatments, by name (``FRICTION_TREATMENTS``):
 - ``regularized``: sgn(v_t) replaced by a smooth approximation (``SIGN_FUNCTIONS``: tanh, sat,
   arctan, sqrt) of width eps; no stick, the contact creeps under sub-limit loads.
 - ``sign``: 000's plain sgn(v_t) at every evaluation (meant for fixed-step RK4; it chatters at v_t = 0).
+
+Paper 000 says only that R (its F) "opposes the slider's motion"; whether it also resists the onset of
+motion, i.e. counts as static holding capacity, is an open assumption. ``RESISTANCE_READINGS`` names
+both readings; the exact treatment takes one (``resistance_reading``), and the parameter file of a
+mechanism states which one it uses (``reference/slider_crank.toml``, ``resistance_reading``):
+
+- ``holds``: a stuck contact is held while |f_req| <= R + mu_s |N| (R is a dry resistance, like friction);
+- ``sliding_only``: held while |f_req| <= mu_s |N| (R acts only while the contact slides).
+
+Both readings give the same sliding motion; they differ only in when a contact sticks and breaks away.
 """
 
 from __future__ import annotations
@@ -51,6 +61,9 @@ Array = np.ndarray
 # study's mechanisms, so its round-off is below 1e5 * 2.2e-16 ~ 2e-11 relative; 1e-10 rejects a
 # hypothesis only when N_j has the wrong sign by more than round-off.
 CONSISTENCY_RTOL = 1e-10
+
+# Readings of a contact's constant resistance R at rest -> the fraction of R in the static limit.
+RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 
 
 class PainleveError(RuntimeError):
@@ -79,13 +92,24 @@ class PainleveError(RuntimeError):
 # --- treatments -------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ExactCoulomb:
-    """Set-valued Coulomb law: stick while |f_required| <= R + mu_s |N|, else slip with mu_k.
+    """Set-valued Coulomb law: stick while |f_required| <= c R + mu_s |N|, else slip with R + mu_k |N|.
 
-    The sliding direction is frozen in the integrator's mode between located events.
+    c = 1 for ``resistance_reading`` 'holds', 0 for 'sliding_only' (``RESISTANCE_READINGS``, see the
+    module docstring). The sliding direction is frozen in the integrator's mode between located events.
     """
 
+    resistance_reading: str = "holds"
     name: str = "exact"
     switched: bool = True
+
+    def __post_init__(self) -> None:
+        if self.resistance_reading not in RESISTANCE_READINGS:
+            raise ValueError(f"resistance_reading = {self.resistance_reading!r}; valid choices: "
+                             f"{', '.join(RESISTANCE_READINGS)}")
+
+    @property
+    def static_resistance_fraction(self) -> float:
+        return RESISTANCE_READINGS[self.resistance_reading]
 
     def factor(self, v: Array) -> Array:  # pragma: no cover - the direction comes from the mode
         raise TypeError("the exact treatment takes its sliding directions from the mode")
@@ -94,7 +118,7 @@ class ExactCoulomb:
         raise TypeError("the exact treatment has a true stick state")
 
     def settings(self) -> dict:
-        return {"friction": self.name}
+        return {"friction": self.name, "resistance_reading": self.resistance_reading}
 
 
 @dataclass(frozen=True)
@@ -156,12 +180,15 @@ class PlainSign:
 FRICTION_TREATMENTS = {"exact": ExactCoulomb, "regularized": RegularizedCoulomb, "sign": PlainSign}
 
 
-def make_friction(name: str, eps: float = 1e-3, sgn: str = "tanh"):
-    """A friction treatment by name: 'exact', 'regularized' (eps, sgn) or 'sign' (eps: apparent stick)."""
+def make_friction(name: str, eps: float = 1e-3, sgn: str = "tanh", resistance_reading: str = "holds"):
+    """A friction treatment by name: 'exact' (resistance_reading), 'regularized' (eps, sgn) or 'sign'
+    (eps: apparent stick). ``resistance_reading`` matters only for 'exact', the one with a static limit."""
     if name not in FRICTION_TREATMENTS:
         raise ValueError(f"unknown friction treatment {name!r}; valid choices: None, {', '.join(FRICTION_TREATMENTS)}")
+    if resistance_reading not in RESISTANCE_READINGS:
+        raise ValueError(f"resistance_reading = {resistance_reading!r}; valid choices: {', '.join(RESISTANCE_READINGS)}")
     if name == "exact":
-        return ExactCoulomb()
+        return ExactCoulomb(resistance_reading=resistance_reading)
     if name == "regularized":
         return RegularizedCoulomb(eps=eps, sgn=sgn)
     return PlainSign(eps=eps)
@@ -173,7 +200,8 @@ class ContactSolution:
     """Accelerations and contact forces at one state (shapes: (m,), (r,), then one entry per contact).
 
     ``friction`` is the tangential force f_j on the body along the tangent (resistance included;
-    in stick, the force the guide must supply). ``margin`` = R + mu_s |N| - |f| in stick, NaN in slip.
+    in stick, the force the guide must supply). ``margin`` = c R + mu_s |N| - |f| in stick (c: the
+    static fraction of R, ``RESISTANCE_READINGS``), NaN in slip.
     """
 
     qdd: Array
@@ -208,6 +236,12 @@ class FrictionDynamics(Dynamics):
         self._mu_k = np.array([c.mu_kinetic for c in self.eom.contacts])
         self._mu_s = np.array([c.mu_static for c in self.eom.contacts])
         self._resistance = np.array([c.resistance for c in self.eom.contacts])
+        # the part of R that holds a stuck contact (the exact law's reading; no static limit otherwise)
+        self._static_resistance = self._resistance * getattr(self.law, "static_resistance_fraction", 1.0)
+
+    def static_limit(self, normal: Array) -> Array:
+        """Largest tangential force each contact can supply at rest: c R + mu_s |N| [N] (see ``RESISTANCE_READINGS``)."""
+        return self._static_resistance + self._mu_s * np.abs(np.asarray(normal, dtype=float))
 
     @property
     def contact_names(self) -> tuple[str, ...]:
@@ -322,7 +356,7 @@ class FrictionDynamics(Dynamics):
             self._painleve(t, hyps, len(good))
         N = chosen["normal"]
         f = chosen["f"]
-        margin = np.where(stick, self._resistance + self._mu_s * np.abs(N) - np.abs(f), np.nan)
+        margin = np.where(stick, self.static_limit(N) - np.abs(f), np.nan)
         return ContactSolution(chosen["qdd"], chosen["lam"], N, f, v_t, stick.copy(), margin)
 
     def _painleve(self, t, hyps, n_good):
@@ -380,11 +414,11 @@ class StickSlipSwitching:
     the mode entries while the mode holds:
 
     - e_stick in slip:  -e_dir v_t       (crosses zero when the contact comes to rest)
-    - e_stick in stick: R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
+    - e_stick in stick: c R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
     - e_dir:            the constant e_dir (never crosses)
 
     At a crossing (``on_event``): a sliding contact at rest sticks if the force needed to hold it
-    satisfies |f_req| <= R + mu_s |N| (f_req: the force the guide would have to supply). Otherwise it
+    satisfies |f_req| <= c R + mu_s |N| (f_req: the force the guide would have to supply). Otherwise it
     slides on in the direction the other forces push it: the sign of its tangential acceleration
     without tangential force, which is -sgn(f_req) (:meth:`_free_direction`) and stays defined at a
     kinematic dead centre, where every v_t = 0 of a one-degree-of-freedom mechanism with a moving
@@ -503,7 +537,7 @@ class StickSlipSwitching:
             entry.update({"f_required": float("inf"), "normal": float("nan"), "limit": float("nan")})
         else:
             entry.update({"f_required": float(held.friction[j]), "normal": float(held.normal[j]),
-                          "limit": float(dyn._resistance[j] + dyn._mu_s[j] * abs(held.normal[j]))})
+                          "limit": float(dyn.static_limit(held.normal)[j])})
         self.transitions.append(entry)
 
     def on_event(self, t: float, y: Array, mode, i: int) -> tuple:

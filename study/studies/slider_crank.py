@@ -189,20 +189,26 @@ def holding_forces(v, q) -> dict[str, float]:
             "lever_dxB_dq1": lever, "f_required": f_req}
 
 
-def breakaway_torque(v, q) -> dict[str, float]:
+def breakaway_torque(v, q, reading: str | None = None) -> dict[str, float]:
     """Drive torque M at which the mechanism, stuck at q (qd = 0), breaks away from the guide.
+
+    ``reading`` ('holds' or 'sliding_only'; default: the parameter set's ``resistance_reading``) says
+    whether the resistance F counts in the static limit (F + mu|N|) or not (mu|N|), the open
+    assumption of paper 000 (``study.solver.friction.RESISTANCE_READINGS``).
 
     The holding force is affine in M, f_req = -(M + T_other) / lever (:func:`holding_forces`), and at
     rest the moment balance of rod + slider about A (000 eq. 31/34, corrected, with zero inertial
     terms) gives the normal force as an affine function of the tangential force f on the slider:
     N = m3 g + (m2 g c2 cos th + l2 sin th f) / (l2 cos th), th = q1 + q2. The slider stays stuck while
-    |f| <= F + mu |N|; breakaway is where equality holds, on the side f_req is already pushing.
+    |f| <= c F + mu |N| (c = 1 or 0 by ``reading``); breakaway is where equality holds, on the side
+    f_req is already pushing.
 
     Returns
     -------
     dict with ``breakaway_M`` [N m] (NaN if no consistent solution), ``breakaway_f`` [N] and
     ``breakaway_normal`` [N] at that torque.
     """
+    c = static_resistance_fraction(v, reading)
     held = holding_forces(v, q)
     th = float(q[0] + q[1])
     a = v.m3 * v.g + v.m2 * v.g * v.c2 / v.l2  # N at f = 0
@@ -210,11 +216,37 @@ def breakaway_torque(v, q) -> dict[str, float]:
     s = 1.0 if held["f_required"] >= 0 else -1.0
     t_other = held["torque_sum"] - held["torque_drive_M"]
     for sigma in (1.0, -1.0):
-        f = (v.F + v.mu * sigma * a) / (s - v.mu * sigma * b)
+        f = (c * v.F + v.mu * sigma * a) / (s - v.mu * sigma * b)
         normal = a + b * f
         if s * f > 0 and sigma * normal >= 0:
             return {"breakaway_M": -f * held["lever_dxB_dq1"] - t_other, "breakaway_f": f, "breakaway_normal": normal}
     return {"breakaway_M": float("nan"), "breakaway_f": float("nan"), "breakaway_normal": float("nan")}
+
+
+# The fraction of F in the static limit for each reading of paper 000's resistance (typed here again on purpose:
+# this module is the paper's method written out independently of the solver, which has RESISTANCE_READINGS).
+STATIC_FRACTION = {"holds": 1.0, "sliding_only": 0.0}
+
+
+def static_resistance_fraction(v, reading: str | None = None) -> float:
+    """1 if F holds a stuck slider (reading 'holds'), 0 if it acts only while sliding ('sliding_only')."""
+    reading = v.resistance_reading if reading is None else reading
+    if reading not in STATIC_FRACTION:
+        raise ValueError(f"reading = {reading!r}; valid choices: {', '.join(STATIC_FRACTION)}")
+    return STATIC_FRACTION[reading]
+
+
+def breakaway_readings(v, q) -> pd.DataFrame:
+    """The breakaway torque of the pose q under each reading of F (table ``seed_breakaway_readings``)."""
+    rows = []
+    held = holding_forces(v, q)
+    for reading in STATIC_FRACTION:
+        b = breakaway_torque(v, q, reading)
+        rows.append({"reading": reading, "static_limit_rule": "F + mu|N|" if STATIC_FRACTION[reading] else "mu|N|",
+                     "parameter_file": reading == v.resistance_reading, "q1": float(q[0]), "q2": float(q[1]),
+                     "M_seed": v.M, "f_required_at_M_seed": held["f_required"], **b,
+                     "breakaway_over_M_seed": b["breakaway_M"] / v.M})
+    return pd.DataFrame(rows)
 
 
 def slider_position(v, q: Array) -> Array:
@@ -319,13 +351,17 @@ def summary_row(name: str, result: SimulationResult, **labels) -> dict:
 
 def _describe(case: Case) -> dict:
     o = case.kwargs
+    v = load_parameters(case.mechanism, case.variant).values
     return {"variant": case.variant, "treatment": o["friction"], "initial": o.get("initial", "consistent"),
-            "method": o.get("method", "none"), "integrator": o["integrator"]}
+            "method": o.get("method", "none"), "integrator": o["integrator"],
+            "resistance_reading": o.get("resistance_reading", v.resistance_reading)}
 
 
 def _case_name(case: Case) -> str:
     if case.group == "printed":
         return f"printed_{case.kwargs['method']}_{case.kwargs['friction']}"
+    if case.group == "resistance_sliding_only":
+        return f"{case.variant}_{case.kwargs['friction']}_sliding_only"
     return f"{case.variant}_{case.kwargs['friction']}"
 
 
@@ -333,6 +369,7 @@ def holding_row(case: Case, result: SimulationResult) -> dict:
     """What holds a run that ends stuck: the static balance at its final state, and the breakaway torque."""
     ps = load_parameters(case.mechanism, case.variant)
     v = ps.values
+    reading = case.kwargs.get("resistance_reading", v.resistance_reading)
     i = len(result.t) - 1
     q = result.q[i]
     row = {"case": _case_name(case), "variant": case.variant, "t": float(result.t[i]), "q1": float(q[0]),
@@ -340,9 +377,10 @@ def holding_row(case: Case, result: SimulationResult) -> dict:
     row.update(holding_forces(v, q))
     normal = float(result.forces["normal_guide"][i])
     row.update({"normal_N": normal, "friction_solver": float(result.forces["friction_guide"][i]),
-                "static_limit": float(v.F + v.mu * abs(normal))})
+                "static_limit": float(static_resistance_fraction(v, reading) * v.F + v.mu * abs(normal))})
     row["holding_fraction"] = abs(row["f_required"]) / row["static_limit"]
-    row.update(breakaway_torque(v, q))
+    row["resistance_reading"] = reading
+    row.update(breakaway_torque(v, q, reading))
     x = slider_position(v, result.q[[0, i]])
     row["slide_distance"] = float(abs(x[1] - x[0]))
     row["crank_rotation"] = float(result.q[i, 0] - result.q[0, 0])
@@ -408,7 +446,7 @@ def summarize(cases: Sequence[Case], load: Load) -> dict[str, pd.DataFrame]:
     """
     rows, timing, held = [], [], []
     for case in cases:
-        if case.group not in ("treatments", "alpha_damping", "printed"):
+        if case.group not in ("treatments", "alpha_damping", "printed", "resistance_sliding_only"):
             continue
         result = load(case)
         name = _case_name(case)
@@ -422,7 +460,11 @@ def summarize(cases: Sequence[Case], load: Load) -> dict[str, pd.DataFrame]:
     if held:
         held_table = pd.DataFrame(held)
         tables["slider_crank_holding_forces"] = held_table
-        tables["seed_holding_forces"] = held_table[held_table["variant"] == "seed"].reset_index(drop=True)
+        seed = held_table[(held_table["variant"] == "seed") & (held_table["case"] == "seed_exact")]
+        tables["seed_holding_forces"] = seed.reset_index(drop=True)
+        seed_case = find_one(cases, group="treatments", variant="seed", friction="exact")
+        seed_pose = load(seed_case).q[-1]
+        tables["seed_breakaway_readings"] = breakaway_readings(load_parameters("slider_crank", "seed").values, seed_pose)
 
     eps_rows, eps_timing = [], []
     for case in eps_sweep_cases(cases):

@@ -337,4 +337,26 @@ def section(ctx: ReportContext) -> list[str]:
     image = _printed_figure(ctx)
     if image:
         lines += [image, ""]
+    lines += _readings_text(ctx.table("seed_breakaway_readings"), summary)
     return lines
+
+
+def _readings_text(readings: pd.DataFrame | None, summary: pd.DataFrame) -> list[str]:
+    """The open assumption about 000's F at rest: break-away torque of the seed pose under each reading."""
+    if readings is None or readings.empty:
+        return []
+    out = ["### The resistance F at rest: an open assumption", "",
+           "000 says only that F 'opposes the slider's motion'. Whether it also holds a stuck slider is not stated; "
+           "the parameter `resistance_reading` (`reference/slider_crank.toml`) chooses, and the exact friction law "
+           "(`study.solver.friction.RESISTANCE_READINGS`) implements both. Break-away torque of the seed's stuck pose "
+           "(000's method, `tables/seed_breakaway_readings.csv`):", ""]
+    rows = [[r["reading"] + (" (parameter file)" if r["parameter_file"] else ""), r["static_limit_rule"],
+             fmt_number(r["breakaway_M"], 3), fmt_number(r["breakaway_over_M_seed"], 3)] for _, r in readings.iterrows()]
+    out += [md_table(["reading", "static limit", "break-away M [N m]", "× 000's M"], rows, [False, False, True, True]), ""]
+    alt = summary[summary["case"] == "seed_exact_sliding_only"] if "case" in summary else summary.iloc[0:0]
+    if len(alt):
+        r = alt.iloc[0]
+        out += [f"Under `sliding_only` the seed run ends in phase '{r['final_phase']}' "
+                f"({int(r['n_stick'])} stick onset(s)): with 000's M = {fmt_number(readings['M_seed'].iloc[0])} N m "
+                "the verdict 'the mechanism does not run' holds under either reading.", ""]
+    return out

@@ -1,0 +1,82 @@
+"""study.verify: the table comparison of `make verify` and of the perturbation check (issue 13)."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+from study.verify import compare_tables, perturbed, rule_for, worst_per_table
+
+
+def _table(**columns) -> pd.DataFrame:
+    return pd.DataFrame(columns)
+
+
+def test_rules_come_from_reference_with_reasons():
+    """Every class of reference/verify.toml states a reason; a listed column gets its class, others the default."""
+    run_error = rule_for("work_precision", "max_abs_dq")
+    assert run_error.name == "run_error" and run_error.reason
+    assert rule_for("work_precision_orders", "error_fine").name == "fixed_step_error"  # the per-table override
+    assert rule_for("anything", "no_such_column").name == "default"
+    assert not rule_for("perturbation_check", "worst_abs_diff").compare
+
+
+def test_numbers_within_and_beyond_their_rule():
+    rule = rule_for("work_precision", "max_abs_dq")
+    base = 1e-6
+    inside = base * (1 + 0.9 * rule.rtol)
+    outside = base * (1 + 1.1 * rule.rtol) + rule.atol
+    ok = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[inside]))
+    bad = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[outside]))
+    assert ok["passed"].all() and not bad["passed"].any()
+    assert bad["worst_rel_diff"].iloc[0] == pytest.approx((outside - base) / base)
+
+
+def test_verdicts_must_be_identical():
+    old = _table(status=["ok", "ok"], holds=[True, False])
+    assert compare_tables("t", old, old.copy())["passed"].all()
+    changed = compare_tables("t", old, _table(status=["ok", "failed: x"], holds=[True, True]))
+    assert list(changed["passed"]) == [False, False]
+
+
+def test_event_time_lists_are_compared_number_by_number():
+    tol = rule_for("slider_crank_summary", "stick_times").atol
+    old = _table(stick_times=["0.0036;4.434"])
+    near = _table(stick_times=[f"0.0036;{4.434 + 0.5 * tol!r}"])
+    far = _table(stick_times=[f"0.0036;{4.434 + 2 * tol!r}"])
+    longer = _table(stick_times=["0.0036;4.434;5"])
+    assert compare_tables("slider_crank_summary", old, near)["passed"].all()
+    assert not compare_tables("slider_crank_summary", old, far)["passed"].any()
+    assert not compare_tables("slider_crank_summary", old, longer)["passed"].any()
+
+
+def test_shape_change_and_nan():
+    old = _table(max_abs_dq=[1.0, math.nan])
+    assert compare_tables("t", old, _table(max_abs_dq=[1.0, math.nan]))["passed"].all()
+    assert not compare_tables("t", old, _table(max_abs_dq=[1.0, 2.0]))["passed"].all()
+    assert not compare_tables("t", old, _table(max_abs_dq=[1.0]))["passed"].all()
+    summary = worst_per_table(compare_tables("t", old, _table(max_abs_dq=[1.0, 2.0])))
+    assert list(summary["passed"]) == [False] and summary["failed_columns"].iloc[0] == "max_abs_dq"
+
+
+def test_perturbed_case_has_its_own_key():
+    from study.pipeline import load_case_lists
+
+    case = load_case_lists(studies=["work_precision"])[0].cases[0]
+    twin = perturbed(case, 4)
+    assert twin.kwargs["perturb_ulps"] == 4 and twin.key() != case.key() and twin.name == case.name
+
+
+@pytest.mark.slow
+def test_perturbation_check_passes(tmp_path):
+    """Every in-house case of the studies rerun from q(0), qd(0) moved by +-4 ulps: every reported column within
+    its rule (reference/verify.toml). Uses (and fills) the pipeline cache."""
+    from study.model.compile import cache_dir
+    from study.verify import perturbation_check
+
+    ok, result = perturbation_check(tmp_path, cache_dir(), ["slider_crank", "work_precision", "sensitivity"],
+                                    workers=1)
+    assert ok, result[~result["passed"]].to_string()
+    assert (tmp_path / "tables" / "perturbation_check.csv").exists()
