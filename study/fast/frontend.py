@@ -106,7 +106,7 @@ def check_supported(ps: ParameterSet | None, integrator: str, acceleration_solve
     problems = []
     if ps is None:
         problems.append("eom_or_mechanism: a user's EquationsOfMotion has no symbolic description to compile; "
-                        "give a built-in mechanism name ('slider_crank', 'quick_return')")
+                        "give the name of a described mechanism (study.params.available_mechanisms())")
     if integrator not in SUPPORTED_INTEGRATORS:
         problems.append(f"integrator={integrator!r} (compiled: {', '.join(SUPPORTED_INTEGRATORS)})")
     if acceleration_solver not in SUPPORTED_ACCELERATION_SOLVERS:
