@@ -252,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="perturbation of q(0), qd(0) in ulps, repeatable (default: +4 and -4)")
     p.set_defaults(func=_verify)
 
-    from study.mechanisms import MECHANISMS
+    from study.params import available_mechanisms
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import STABILIZATIONS
