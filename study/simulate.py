@@ -203,10 +203,11 @@ def simulate(
     t_out = output_times(float(t_end), output_step)
     guard = RunGuard(dyn, monitor, max_evaluations, step if integrator == "RK4" else None)
     cpu0 = time.process_time()
-    traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
-                     step=step, indicators=indicators, post_step=post_step, progress=progress,
-                     switching=switching, monitor=lambda t, y: monitor.check(t, y[:m]), min_step=min_step,
-                     describe=guard.describe)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values
+        traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
+                         step=step, indicators=indicators, post_step=post_step, progress=progress,
+                         switching=switching, monitor=lambda t, y: monitor.check(t, y[:m]), min_step=min_step,
+                         describe=guard.describe)
     cpu = time.process_time() - cpu0
     nfev = dyn.nfev
 

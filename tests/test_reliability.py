@@ -1,6 +1,9 @@
 """Issue 14: the pieces behind the catalogue, checked against independent values."""
 
+import io
 import os
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -96,5 +99,17 @@ def test_summary_checked_before_any_case_runs(tmp_path):
     (folder / "a.toml").write_text(TINY)
     (folder / "b.toml").write_text(TINY.replace("study.studies.sliding_mode", "study.studies.missing"))
     with pytest.raises(pl.CaseListError, match="b.toml"):
-        pl.run_pipeline(tmp_path / "r", tmp_path / "cache", workers=1, folder=folder, stream=open(os.devnull, "w"))
+        pl.run_pipeline(tmp_path / "r", tmp_path / "cache", workers=1, folder=folder, stream=io.StringIO())
     assert not (tmp_path / "cache" / "runs").exists()  # a.toml's cases did not run either
+
+
+def test_command_line_failure_is_one_line_in_a_real_process(tmp_path):
+    """Outside pytest nothing captures warnings: a diverging run must still print one line (no traceback,
+    no overflow warnings) and write nothing."""
+    proc = subprocess.run([sys.executable, "-m", "study", "simulate", "quick_return", "--integrator", "RK4",
+                           "--step", "0.1", "--t-end", "0.3", "--out", str(tmp_path / "run")],
+                          capture_output=True, text=True, env={**os.environ, "STUDY_TRACEBACK": ""})
+    assert proc.returncode == 1
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "step h = 0.1 s is likely too large" in proc.stderr
+    assert list(tmp_path.iterdir()) == []

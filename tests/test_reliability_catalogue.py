@@ -16,10 +16,10 @@ independently (scipy's own tolerance handling, hand-typed equations in tests/han
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
-import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -28,16 +28,15 @@ import pytest
 
 import handwritten
 from study import pipeline as pl
-from study.cli import ProgressPrinter, main
+from study.cli import main
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError, RunTooLargeError,
                           SingularConfigurationError)
-from study.integrity import RegeneratedWarning, ensure_generated, sha256_text, write_checked
+from study.integrity import RegeneratedWarning, ensure_generated, write_checked
 from study.model.eom import SlidingContact
 from study.params import load_parameters
-from study.reference_data import tolerance
 from study.results import SimulationResult
-from study.simulate import check_run_size, simulate
-from study.solver.checks import SingularityMonitor, singularity_measure, validate_equations
+from study.simulate import simulate
+from study.solver.checks import validate_equations
 from study.solver.initial import InitialConditionError, consistent_initial_conditions
 
 
@@ -96,7 +95,7 @@ def _one_case_store(tmp):
     (folder / "one.toml").write_text(ONE_CASE)
     case = pl.load_case_list(folder / "one.toml").cases[0]
     store = pl.Store(tmp / "cache" / "runs")
-    pl.run_cases([case], store, pl.InlineExecutor(), stream=open(os.devnull, "w"))
+    pl.run_cases([case], store, pl.InlineExecutor(), stream=io.StringIO())
     return case, store
 
 
@@ -229,7 +228,7 @@ def _summary_tables(tmp):
     folder.mkdir()
     (folder / "one.toml").write_text(ONE_CASE)
     record = tmp / "record"
-    pl.run_pipeline(tmp / "reports", tmp / "cache", workers=1, folder=folder, stream=open(os.devnull, "w"),
+    pl.run_pipeline(tmp / "reports", tmp / "cache", workers=1, folder=folder, stream=io.StringIO(),
                     record_root=record)
     return record, sorted((tmp / "reports" / "tables").glob("sliding_mode*.csv"))
 
@@ -352,7 +351,7 @@ def nan_case_is_a_failure_not_a_success(tmp):
 
     def action():
         out = pl.run_cases([case], pl.Store(tmp / "cache" / "runs"), pl.InlineExecutor(),
-                           stream=open(os.devnull, "w"))
+                           stream=io.StringIO())
         raise RuntimeError(next(iter(out.failed.values())))
     return action
 

@@ -109,11 +109,12 @@ class SingularityMonitor:
         self.smallest = min(self.smallest, rho)
         crossed = self._last is not None and not np.linalg.det(J @ self._last[1].T) > 0
         if not rho >= self.ratio or crossed:
-            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s (the Jacobian's rows turned over), now at"
-                     if crossed and rho >= self.ratio else f"at t = {t:.9g} s,")
+            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: the Jacobian's rows turned over, so "
+                     f"Phi_q lost rank within the step; now at" if crossed and rho >= self.ratio else
+                     f"at t = {t:.9g} s: Phi_q is (nearly) rank-deficient at")
             raise SingularConfigurationError(
-                f"{self.eom.name}: singular configuration {where} q = {_fmt(q)}: the constraint Jacobian "
-                f"Phi_q is (nearly) rank-deficient, sigma_min / scale = {rho:.3g} (singular below {self.ratio:g}, "
+                f"{self.eom.name}: singular configuration {where} q = {_fmt(q)}, where "
+                f"sigma_min(Phi_q) / scale = {rho:.3g} (singular below {self.ratio:g}, "
                 f"reference/tolerances.toml: singular_ratio); accelerations and multipliers are not determined "
                 f"there (a dead centre, or links aligned)", t=float(t), quantity="Phi_q", pose=list(map(float, q)),
                 measure=rho)
