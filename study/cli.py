@@ -22,6 +22,7 @@ EXAMPLES = {
     "reproduce": "python -m study reproduce --workers 2",
     "simulate": "python -m study simulate slider_crank --variant slip_then_stick --t-end 5 --out /tmp/sc",
     "bench": "python -m study bench --quick --out /tmp/bench",
+    "verify": "python -m study verify work_precision --perturb",
 }
 
 
