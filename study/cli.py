@@ -55,8 +55,18 @@ def _friction_text(result, chosen_by_default: bool) -> str:
     return text + (" [parameter set's default]" if chosen_by_default else "")
 
 
+def default_friction(eom) -> str:
+    """The friction ``simulate`` applies unless told otherwise: 'exact' (event-located stick/slip) when
+    a sliding contact of ``eom`` has a nonzero Coulomb coefficient or resistance, else 'none'.
+
+    (Here, not in study.simulate, whose source is part of every in-house case key.)
+    """
+    active = any(c.mu_static or c.mu_kinetic or c.resistance for c in eom.contacts)
+    return "exact" if active else "none"
+
+
 def _simulate(args: argparse.Namespace) -> int:
-    from study.simulate import default_friction, resolve, simulate
+    from study.simulate import resolve, simulate
 
     options = {}
     for item in args.option or []:
@@ -70,7 +80,7 @@ def _simulate(args: argparse.Namespace) -> int:
     try:
         friction = args.friction
         if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-            friction = default_friction(resolve(args.mechanism, args.variant)[0]) or "none"
+            friction = default_friction(resolve(args.mechanism, args.variant)[0])
         result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
                           integrator=args.integrator, rtol=args.rtol, atol=args.atol, step=args.step,
                           acceleration_solver=args.acceleration_solver, backend=args.backend,
