@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import sys
 import time
@@ -55,7 +56,7 @@ def _friction_text(result, chosen_by_default: bool) -> str:
     return text + (" [parameter set's default]" if chosen_by_default else "")
 
 
-def default_friction(eom) -> str:
+def _default_friction(eom) -> str:
     """The friction ``simulate`` applies unless told otherwise: 'exact' (event-located stick/slip) when
     a sliding contact of ``eom`` has a nonzero Coulomb coefficient or resistance, else 'none'.
 
@@ -80,7 +81,7 @@ def _simulate(args: argparse.Namespace) -> int:
     try:
         friction = args.friction
         if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-            friction = default_friction(resolve(args.mechanism, args.variant)[0])
+            friction = _default_friction(resolve(args.mechanism, args.variant)[0])
         result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
                           integrator=args.integrator, rtol=args.rtol, atol=args.atol, step=args.step,
                           acceleration_solver=args.acceleration_solver, backend=args.backend,
@@ -185,11 +186,12 @@ def build_parser() -> argparse.ArgumentParser:
     from study.mechanisms import MECHANISMS
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.integrate import INTEGRATORS
-    from study.solver.stabilization import STABILIZATIONS
+    from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
 
-    from study.simulate import BACKENDS
+    from study.simulate import BACKENDS, simulate
     from study.solver.friction import FRICTION_TREATMENTS
-    from study.solver.stabilization import SIGN_FUNCTIONS
+
+    defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
 
     p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
     p.add_argument("mechanism", choices=list(MECHANISMS))
@@ -198,15 +200,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
     p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
     p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
-    p.add_argument("--backend", default="reference", choices=list(BACKENDS),
-                   help="reference: Python + scipy (default); compiled: numba (built-in mechanisms)")
+    p.add_argument("--backend", default=defaults["backend"], choices=list(BACKENDS),
+                   help=f"reference: Python + scipy; compiled: numba, built-in mechanisms (default {defaults['backend']})")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
                    help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
                         "stick/slip where a contact has friction, else none)")
-    p.add_argument("--friction-eps", type=float, default=1e-3, metavar="EPS",
-                   help="regularization width [m/s] of 'regularized', stick band of 'sign' (default 1e-3)")
-    p.add_argument("--friction-sgn", default="tanh", choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
-                   help="smooth sgn of 'regularized' (default tanh)")
+    p.add_argument("--friction-eps", type=float, default=defaults["friction_eps"], metavar="EPS",
+                   help=f"regularization width [m/s] of 'regularized', stick band of 'sign' "
+                        f"(default {defaults['friction_eps']:g})")
+    p.add_argument("--friction-sgn", default=defaults["friction_sgn"], choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
+                   help=f"smooth sgn of 'regularized' (default {defaults['friction_sgn']})")
     p.add_argument("--rtol", type=float, default=1e-8)
     p.add_argument("--atol", type=float, default=1e-10)
     p.add_argument("--step", type=float, default=None, help="fixed step h (RK4)")
