@@ -30,13 +30,6 @@ def _check_positive(name: str, value) -> None:
         raise ValueError(f"{name} = {value!r} must be finite and > 0")
 
 
-def default_friction(eom: EquationsOfMotion) -> str | None:
-    """The friction a run of ``eom`` gets unless told otherwise: 'exact' (event-located stick/slip)
-    when a sliding contact has a nonzero Coulomb coefficient or resistance, else None (no friction)."""
-    active = any(c.mu_static or c.mu_kinetic or c.resistance for c in eom.contacts)
-    return "exact" if active else None
-
-
 def resolve(eom_or_mechanism, variant: str | None):
     """An EquationsOfMotion, or a built-in mechanism name (with its variant) -> (eom, params or None)."""
     if isinstance(eom_or_mechanism, EquationsOfMotion):

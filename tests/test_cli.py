@@ -1,5 +1,6 @@
 """The command line: simulate writes a result and a one-line summary; bad input is named."""
 
+import functools
 import importlib
 import subprocess
 import sys
@@ -79,14 +80,15 @@ def test_simulate_quick_return_seed_has_no_friction_by_default(tmp_path, capsys)
 
 def test_simulate_passes_variant_backend_and_friction(monkeypatch, tmp_path):
     """--variant and its alias --case, --backend and the friction options reach study.simulate."""
+    module = importlib.import_module("study.simulate")  # not the function the package re-exports by that name
     seen = []
 
+    @functools.wraps(module.simulate)  # keeps the signature, from which the CLI reads its defaults
     def fake(mechanism, **kwargs):
         seen.append(kwargs)
         raise ValueError("stop here")
 
-    # the module, not the function study.simulate that the package re-exports under the same name
-    monkeypatch.setattr(importlib.import_module("study.simulate"), "simulate", fake)
+    monkeypatch.setattr(module, "simulate", fake)
     base = ["simulate", "slider_crank", "--out", str(tmp_path / "x")]
     assert main(base + ["--variant", "slip_then_stick", "--backend", "compiled", "--friction", "sign",
                         "--friction-eps", "2e-3"]) == 2

@@ -84,11 +84,11 @@ def inspect(report: Path, screenshots: Path | None = None) -> dict:
     return found
 
 
-pytestmark = [
-    pytest.mark.slow,
-    pytest.mark.skipif(find_chromium() is None, reason="no Chromium installed (Debian: apt-get install chromium, "
-                       "or `make browser`; STUDY_CHROMIUM=/path/to/chrome to use another)"),
-]
+def browser_test(test):
+    """Slow (run by `make reproduce`), and skipped with its reason where no Chromium is installed."""
+    skip = pytest.mark.skipif(find_chromium() is None, reason="no Chromium installed (Debian: apt-get install "
+                              "chromium, or `make browser`; STUDY_CHROMIUM=/path/to/chrome to use another)")
+    return pytest.mark.slow(skip(test))
 
 
 @pytest.fixture(scope="module")
@@ -98,26 +98,31 @@ def page():
     return inspect(REPORT, SCREENSHOTS)
 
 
+@browser_test
 def test_browser_every_image_loads(page):
     assert page["images"], "the report shows no image"
     assert [i["alt"] for i in page["images"] if not i["loaded"]] == []
 
 
+@browser_test
 def test_browser_no_raw_markdown_left(page):
     assert page["raw"] == {"link": [], "code span": [], "emphasis": [], "math": []}
 
 
+@browser_test
 def test_browser_math_has_a_size(page):
     assert page["errata"] is not None and page["errata"]["maths"] > 0
     assert [m["text"] for m in page["maths"] if not (m["width"] > 0 and m["height"] > 0)] == []
 
 
+@browser_test
 def test_browser_no_horizontal_overflow_outside_tables(page):
     assert page["overflow"] == []
     assert page["scrollWidth"] <= page["width"]
     assert page["wrapped"] == page["tables"] > 0
 
 
+@browser_test
 def test_browser_screenshots_saved(page):
     for name in ("first_screen.png", "errata.png"):
         assert (SCREENSHOTS / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
