@@ -251,7 +251,6 @@ def build_parser() -> argparse.ArgumentParser:
             p.set_defaults(studies=None)
         p.set_defaults(func=func)
 
-    from study.params import available_mechanisms
     p = sub.add_parser("verify", help="regenerate every table and compare it with reports/tables (reference/verify.toml); "
                                       "--perturb: rerun every in-house case from a state moved by a few ulps instead")
     p.add_argument("studies", nargs="*", help="studies to check (default: every case list, plus initial and errata)")
@@ -281,15 +280,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
     p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
     p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
-    p.add_argument("--backend", default="reference", choices=list(BACKENDS),
-                   help="reference: Python + scipy (default); compiled: numba (described mechanisms)")
+    p.add_argument("--backend", default=defaults["backend"], choices=list(BACKENDS),
+                   help=f"reference: Python + scipy; compiled: numba, described mechanisms (default {defaults['backend']})")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
                    help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
                         "stick/slip where a contact has friction, else none)")
-    p.add_argument("--friction-eps", type=float, default=1e-3, metavar="EPS",
-                   help="regularization width [m/s] of 'regularized', stick band of 'sign' (default 1e-3)")
-    p.add_argument("--friction-sgn", default="tanh", choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
-                   help="smooth sgn of 'regularized' (default tanh)")
+    p.add_argument("--friction-eps", type=float, default=defaults["friction_eps"], metavar="EPS",
+                   help=f"regularization width [m/s] of 'regularized', stick band of 'sign' "
+                        f"(default {defaults['friction_eps']:g})")
+    p.add_argument("--friction-sgn", default=defaults["friction_sgn"], choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
+                   help=f"smooth sgn of 'regularized' (default {defaults['friction_sgn']})")
     p.add_argument("--rtol", type=float, default=None, help="relative tolerance (adaptive integrators; default 1e-8)")
     p.add_argument("--atol", type=float, default=None, help="absolute tolerance (adaptive integrators; default 1e-10)")
     p.add_argument("--max-evaluations", type=float, default=None,
