@@ -33,17 +33,20 @@ from study.results import SimulationResult
 Array = np.ndarray
 
 
-def absolute_state(ps: ParameterSet, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array, Array]:
-    """(x, xd, xdd) of every body (x, y, theta per body, description order) from relative coordinates."""
-    d = mechanisms.description(ps)
-    f = mechanisms.equations(ps).kinematics
+def _absolute(bodies, f, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array, Array]:
+    """(x, xd, xdd) of ``bodies`` from relative coordinates, with the generated kinematics ``f``."""
     x, xd, xdd = [], [], []
-    for b in d.bodies:
+    for b in bodies:
         jac, ja = f[f"jac__{b}.com"](q), f[f"angle_jac__{b}"](q)
         x += list(f[f"pos__{b}.com"](q)) + [f[f"angle__{b}"](q)]
         xd += list(jac @ qd) + [ja @ qd]
         xdd += list(jac @ qdd + f[f"bias__{b}.com"](q, qd)) + [ja @ qdd + f[f"angle_bias__{b}"](q, qd)]
     return np.array(x, dtype=float), np.array(xd, dtype=float), np.array(xdd, dtype=float)
+
+
+def absolute_state(ps: ParameterSet, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array, Array]:
+    """(x, xd, xdd) of every body (x, y, theta per body, description order) from relative coordinates."""
+    return _absolute(mechanisms.description(ps).bodies, mechanisms.equations(ps).kinematics, q, qd, qdd)
 
 
 def joint_reactions(ps: ParameterSet, result: SimulationResult) -> dict[str, Array]:
@@ -61,12 +64,13 @@ def joint_reactions(ps: ParameterSet, result: SimulationResult) -> dict[str, Arr
     """
     d = mechanisms.description(ps)
     eom = mechanisms.equations(ps, "absolute")
+    kinematics = mechanisms.equations(ps).kinematics
     rows = {name: i for i, name in enumerate(eom.constraint_names)}
     contacts = {c.name: c for c in eom.contacts}
     n = len(result.t)
     lam = np.zeros((n, eom.n_constraints))
     for k in range(n):
-        x, xd, xdd = absolute_state(ps, result.q[k], result.qd[k], result.qdd[k])
+        x, xd, xdd = _absolute(d.bodies, kinematics, result.q[k], result.qd[k], result.qdd[k])
         rhs = eom.forces(result.t[k], x, xd) - eom.mass(x) @ xdd
         for name, c in contacts.items():
             tangential = result.forces.get(f"friction_{name}")

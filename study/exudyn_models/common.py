@@ -561,7 +561,7 @@ def cumulative_trapezoid(y: Array, t: Array) -> Array:
 
 WORK_NOTE = ("work_<load> = trapezoidal integral of the load's power sampled at every solver step (then "
              "sampled at the output times): error <= t_end h^2 max|P''| / 12 for smooth power, O(h) "
-             "locally at a jump of a discontinuous load (on/off cutting law)")
+             "locally at a jump of a discontinuous (on/off) load")
 
 
 def body_energies(bodies: dict[str, tuple[float, float]], pos: dict[str, Array], vel: dict[str, Array],

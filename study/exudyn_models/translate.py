@@ -228,7 +228,7 @@ def loads_jacobian(d: Description) -> int:
     The regularized friction and resistance tanh(v/eps) need their derivative in the Newton matrix
     (without it Newton diverges, see common.simulation_settings); the frictionless runs of such a
     mechanism (``friction='none'``) keep the same setting, so the two differ only by the friction
-    itself. Without friction the other laws do not need it: for the quick-return's smooth cutting law
+    itself. Without friction the other laws do not need it: for the study's steepest smooth law (a tanh-ramped force)
     the Newton iteration counts with and without the load Jacobian agree within 0.5 % (20 s,
     h = 1e-3: 55 962 vs 55 735) while the extra user-function calls per iteration double the CPU
     time; an on/off law is piecewise constant, its numerical derivative across a switch meaningless.

@@ -15,7 +15,8 @@ from study.model.joints import GROUND, Description, Friction
 from study.params import ParameterSet
 
 LABEL = "slider-crank (paper 000)"
-#: Parameters the description reads (the order fixes the generated code's parameter layout).
+#: The parameter file's entries (numbers become symbols of the description; alpha_law selects its form;
+#: resistance_reading is read by the friction solver).
 PARAMETERS = ("J1", "m1", "J2", "m2", "m3", "J3", "l1", "l2", "c2", "g", "mu", "F", "alpha", "M", "alpha_law", "resistance_reading")
 
 

@@ -32,7 +32,7 @@ Conventions
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any, Mapping, Sequence
 
@@ -148,7 +148,6 @@ class Description:
         self.inputs: dict[sp.Symbol, Input] = {}
         self.switches: list[tuple[str, Expr, sp.Symbol]] = []
         self.branch: tuple[Expr, str] | None = None
-        self.forces_of_interest: dict[str, str] = {}
 
     # --- bodies and points -------------------------------------------------------------------
     def body(self, name: str, mass: Any, inertia: Any, points: Mapping[str, tuple[Any, Any]], angle: Any) -> str:

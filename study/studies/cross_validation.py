@@ -25,7 +25,7 @@ Every case of one set has the same horizon and output step, so all comparisons u
     the same joint, with the observed order.
 
 The friction force compared is the whole tangential force of the guide: the in-house
-``friction_<contact>`` already contains the resistance F (slider-crank), Exudyn records the Coulomb
+``friction_<contact>`` already contains the contact's resistance F, Exudyn records the Coulomb
 part and the resistance separately (``friction_guide`` + ``resistance_guide``).
 
 In-house tree-joint reactions are not multipliers (the relative coordinates eliminate those joints);
@@ -37,6 +37,7 @@ the mechanism's description; nothing here names a mechanism.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Callable, Iterable
 
 import numpy as np
@@ -61,8 +62,12 @@ AGREEMENT_KEYS = ["mechanism", "variant", "friction", "t_end", "engine", "solver
 # --------------------------------------------------------------------------------------------
 def contact_name(result: SimulationResult) -> str | None:
     """The first sliding contact of the result's mechanism (its description), or None."""
-    ps = load_parameters(result.meta["mechanism"], result.meta["variant"])
-    contacts = mechanisms.description(ps).contacts()
+    return _contact_name(result.meta["mechanism"], result.meta["variant"])
+
+
+@lru_cache(maxsize=None)
+def _contact_name(mechanism: str, variant: str) -> str | None:
+    contacts = mechanisms.description(load_parameters(mechanism, variant)).contacts()
     return contacts[0].name if contacts else None
 
 
