@@ -50,7 +50,7 @@ def test_absolute_coordinates_agree_with_relative(mechanism, variant):
 
 
 def test_slider_crank_reactions_against_hand_balance():
-    """Slider-crank at rest-free state: the slider's and the crank's Newton equations by hand."""
+    """Slider-crank while sliding: the slider's and the crank's Newton equations written by hand."""
     ps = load_parameters("slider_crank", "sustained_sliding")
     v = ps.values
     run = study.simulate("slider_crank", variant="sustained_sliding", t_end=0.2, output_step=0.1,
@@ -65,13 +65,15 @@ def test_slider_crank_reactions_against_hand_balance():
             + v.l2 * (aph * math.sin(ph) + wph ** 2 * math.cos(ph)))
     friction = run.forces["friction_guide"][-1]
     normal = run.forces["normal_guide"][-1]
+    # the balances hold exactly for the solver's accelerations: round-off of the largest force involved
+    atol = tolerance("round_off") * max(abs(f[-1]) for f in r.values())
     # slider: m3 a_B = F_rod->slider + friction + (0, N) + weight; rod->slider = joint B reaction
-    assert r["joint_B_x"][-1] + friction == pytest.approx(v.m3 * ax_b, rel=1e-9, abs=1e-9)
-    assert r["joint_B_y"][-1] + normal - v.m3 * v.g == pytest.approx(0.0, abs=1e-9 * v.m3 * v.g)
-    assert r["joint_guide_n"][-1] == pytest.approx(normal, rel=1e-9)
+    assert r["joint_B_x"][-1] + friction == pytest.approx(v.m3 * ax_b, abs=atol)
+    assert r["joint_B_y"][-1] + normal - v.m3 * v.g == pytest.approx(0.0, abs=atol)
+    assert r["joint_guide_n"][-1] == pytest.approx(normal, abs=atol)
     # crank: balanced (COM at O, no acceleration): ground->crank = -(rod->crank) - weight = A reaction - weight
-    assert r["joint_O_x"][-1] == pytest.approx(r["joint_A_x"][-1], rel=1e-9, abs=1e-9)
-    assert r["joint_O_y"][-1] == pytest.approx(r["joint_A_y"][-1] + v.m1 * v.g, rel=1e-9)
+    assert r["joint_O_x"][-1] == pytest.approx(r["joint_A_x"][-1], abs=atol)
+    assert r["joint_O_y"][-1] == pytest.approx(r["joint_A_y"][-1] + v.m1 * v.g, abs=atol)
 
 
 def test_four_bar_cut_joint_reaction_is_the_multiplier():
