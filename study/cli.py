@@ -24,6 +24,7 @@ EXAMPLES = {
     "simulate": "python -m study simulate slider_crank --variant slip_then_stick --t-end 5 --out /tmp/sc",
     "bench": "python -m study bench --quick --out /tmp/bench",
     "verify": "python -m study verify work_precision --perturb",
+    "describe": "python -m study describe quick_return --variant guide_friction",
 }
 
 
@@ -102,6 +103,13 @@ def _simulate(args: argparse.Namespace) -> int:
           f"{_friction_text(result, args.friction is None)}: max|Phi| = {s['max_abs_phi']:.3e}, "
           f"energy error = {s['energy_error']:.3e} J ({s['energy_error_relative']:.2e} of max T), "
           f"CPU {s['cpu_seconds']:.3f} s, {result.stats['nfev']} evaluations -> {path}")
+    return 0
+
+
+def _describe(args: argparse.Namespace) -> int:
+    from study.describe import describe_text
+
+    print(describe_text(args.mechanism, args.variant))
     return 0
 
 
@@ -300,6 +308,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stabilization option, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8")
     p.add_argument("--out", type=Path, required=True, help="output path (writes .csv and .json)")
     p.set_defaults(func=_simulate)
+
+    p = sub.add_parser("describe", help="print a mechanism's bodies, joints, loads, variants and consistent initial state")
+    p.add_argument("mechanism", choices=list(available_mechanisms()))
+    p.add_argument("--variant", "--case", dest="variant", default="seed", help="parameter-set variant (default: seed)")
+    p.set_defaults(func=_describe)
 
     from study.bench import add_arguments as bench_arguments
 

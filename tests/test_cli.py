@@ -131,3 +131,40 @@ def test_bench_subcommand_runs_the_benchmark(monkeypatch, tmp_path):
     assert main(["bench", "--quick", "--skip-compile", "--out", str(tmp_path)]) == 0
     assert study.bench.main(["--quick", "--out", str(tmp_path)]) == 0
     assert [(a.quick, a.skip_compile, a.out) for a in seen] == [(True, True, tmp_path), (True, False, tmp_path)]
+
+
+# --- describe (issue 16) ------------------------------------------------------------------------
+
+def test_describe_prints_the_four_bar_and_a_consistent_state(capsys):
+    """Checked against the four-bar's hand geometry, not against the description code: three bodies
+    hung from two ground pivots by a chain of four revolute joints leave exactly one joint (B, the
+    coupler-rocker joint, last in the chain) as the loop closure; the printed q(0) must close the
+    loop a e(q1) + b e(q2) = d e_x + c e(q3) to the round-off of its 10 printed digits."""
+    from study.params import load_parameters
+
+    assert main(["describe", "four_bar"]) == 0
+    out = capsys.readouterr().out
+    for body in ("crank", "coupler", "rocker"):
+        assert f"  {body}: mass" in out
+    assert "  B: revolute, coupler.B = rocker.B [cut, rows B_x, B_y]" in out
+    assert sum(line.endswith("[tree]") for line in out.splitlines()) == 3
+    assert "gravity g along -y" in out
+    q = np.array(eval(next(l for l in out.splitlines() if l.strip().startswith("q(0)")).split("=")[1].split("]")[0] + "]"))
+    v = load_parameters("four_bar").values
+    gap = v.a * np.exp(1j * q[0]) + v.b * np.exp(1j * q[1]) - v.d - v.c * np.exp(1j * q[2])
+    assert abs(gap) < 10 * tolerance("describe_printed_digits") * (v.a + v.b + v.c + v.d)
+
+
+def test_describe_lists_variants_with_their_changes(capsys):
+    assert main(["describe", "quick_return", "--variant", "guide_friction"]) == 0
+    out = capsys.readouterr().out
+    assert "guide_friction: study's own case" in out and "mu_guide = 0.1" in out
+    assert "ram_guide: prismatic" in out and "Coulomb contact mu_s = mu_guide" in out
+    assert "switching function" not in out          # the smooth law has tanh ramps, no switches
+    assert main(["describe", "quick_return"]) == 0   # the seed's on/off law switches on the ram's speed
+    assert "switching function v_D: vx(ram.D)" in capsys.readouterr().out
+
+
+def test_describe_unknown_mechanism_names_the_choices():
+    proc = subprocess.run([sys.executable, "-m", "study", "describe", "pendulum"], capture_output=True, text=True)
+    assert proc.returncode == 2 and "invalid choice: 'pendulum'" in proc.stderr and "four_bar" in proc.stderr
