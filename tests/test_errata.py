@@ -16,6 +16,7 @@ import sympy as sp
 
 import handwritten
 from study import errata
+from study.errata.judge import paper_context, select
 from study.mechanisms import initial_state, load
 from study.params import load_parameters
 from study.reference_data import tolerance
@@ -227,10 +228,10 @@ def test_every_correction_matches_the_derived_target_on_the_manifold(table):
         entry = entries[r.formula]
         if r.verdict == EXACT or entry["kind"] in ("sparse", "initial_conditions"):
             continue
-        ctx = errata._context(entry["paper"])
+        ctx = paper_context(entry["paper"])
         parsed = sp.parse_expr(r.derived.split(" = 0")[0], local_dict=dict(ctx.names))
         shown = sp.Matrix(parsed) if isinstance(parsed, list) else sp.Matrix([parsed])
-        target = errata._select(ctx.target(entry["target"]), entry.get("index"))
+        target = select(ctx.target(entry["target"]), entry.get("index"))
         if shown.shape != target.shape:
             target = target.T
         smp = ctx.samples()

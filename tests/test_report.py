@@ -12,6 +12,7 @@ import pytest
 from study import pipeline as pl
 from study.report import build_report
 from study import errata
+from study.errata.table import errata_markdown
 from study.report.render import markdown_to_html, md_math, md_table, number_figures
 from tiny_cases import TINY
 
@@ -148,7 +149,7 @@ def test_report_html_typesets_the_errata(saved, tmp_path):
                            "printed": r"a_{22} = m_2 c_2 l_1 + m_3 l_2^2 + J_2", "derived": "J2 + c2**2*m2 + l2**2*m3",
                            "derived_latex": r"J_{2} + {\color{crimson}c_{2}^{2} m_{2}} + l_{2}^{2} m_{3}",
                            "difference_latex": r"c_{2} m_{2} \left(- c_{2} + l_{1}\right)", "note": "m2*c2 |x|"}])
-    (reports / "tables" / "errata.md").write_text(errata._markdown(frame))
+    (reports / "tables" / "errata.md").write_text(errata_markdown(frame))
     build_report(reports, cache, cases)
     html = (reports / "report.html").read_text()
     section = html[html.index('<h2 id="errata">'):html.index("<h2", html.index('<h2 id="errata">') + 5)]
