@@ -36,6 +36,8 @@ LABEL = "Andrews' squeezing mechanism (Test Set for IVP solvers)"
 PARAMETERS = ("m1", "m2", "m3", "m4", "m5", "m6", "m7", "xa", "ya", "xb", "yb", "xc", "yc", "c0",
               "i1", "i2", "i3", "i4", "i5", "i6", "i7", "d", "da", "e", "ea", "rr", "ra", "l0",
               "ss", "sa", "sb", "sc", "sd", "ta", "tb", "u", "ua", "ub", "zf", "zt", "fa", "mom")
+#: The Test Set's horizon [s]: the crank turns ~2.5 times in it (generic checks scale their horizons by it).
+TIME_SCALE = 0.03
 COORDINATES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
 
 
