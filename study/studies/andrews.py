@@ -9,7 +9,7 @@ and Exudyn (index 3, index 2) over h, all to t = 0.03 s. The published values (t
 
 - ``andrews_reference``: per angle and rate at t = 0.03 s: published value, in-house reference,
   difference (absolute and relative);
-- ``andrews_work_precision``: one row per run: engine, method, integrator or solver, rtol or step,
+- ``andrews_work_precision``: one row per run: engine, backend, method, integrator or solver, rtol or step,
   the error at 0.03 s against the published values (``error_published``) and against the in-house
   reference (``error_reference``), evaluations or steps, max|Phi|;
 - ``andrews_work_precision_timing``: the same keys with CPU seconds (machine-dependent, kept apart);
@@ -32,7 +32,7 @@ from study.results import SimulationResult
 Load = Callable[[Case], SimulationResult]
 TABLE = "andrews_published"
 COORDINATES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
-KEYS = ["group", "engine", "method", "integrator", "rtol", "step"]
+KEYS = ["group", "engine", "backend", "method", "integrator", "rtol", "step"]
 
 
 def published() -> tuple[np.ndarray, np.ndarray]:
@@ -48,13 +48,14 @@ def final_state(result: SimulationResult, t_end: float) -> tuple[np.ndarray, np.
 
 
 def describe(case: Case) -> dict:
-    """Identifying columns: group, engine, method, integrator (Exudyn: its solver), rtol, step (h)."""
+    """Identifying columns: group, engine, backend, method, integrator (Exudyn: its solver), rtol, step (h)."""
     o = case.kwargs
     if case.engine == "exudyn":
-        return {"group": case.group, "engine": "exudyn", "method": "exudyn", "integrator": o.get("solver", "index3"),
-                "rtol": np.nan, "step": o["h"]}
-    return {"group": case.group, "engine": "inhouse", "method": case.label("method", o.get("method", "none")),
-            "integrator": o["integrator"], "rtol": o.get("rtol", np.nan), "step": o.get("step", np.nan)}
+        return {"group": case.group, "engine": "exudyn", "backend": "exudyn", "method": "exudyn",
+                "integrator": o.get("solver", "index3"), "rtol": np.nan, "step": o["h"]}
+    return {"group": case.group, "engine": "inhouse", "backend": o.get("backend", "reference"),
+            "method": case.label("method", o.get("method", "none")), "integrator": o["integrator"],
+            "rtol": o.get("rtol", np.nan), "step": o.get("step", np.nan)}
 
 
 def reference_rows(q: np.ndarray, qd: np.ndarray) -> pd.DataFrame:
