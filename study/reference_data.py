@@ -31,3 +31,14 @@ def tolerance(key: str, table: str = "tolerances") -> float:
 
 def reason(key: str, table: str = "tolerances") -> str:
     return _table(table)[key]["reason"]
+
+
+def values(key: str, table: str) -> tuple[float, ...]:
+    """The list ``value`` of ``[key]`` in reference/<table>.toml (a published vector, e.g. a reference solution)."""
+    data = _table(table)
+    if key not in data:
+        raise KeyError(f"no entry {key!r} in reference/{table}.toml; known: {', '.join(data)}")
+    value = data[key]["value"]
+    if not isinstance(value, list):
+        raise TypeError(f"reference/{table}.toml [{key}] value = {value!r} is not a list (use tolerance() for a number)")
+    return tuple(float(v) for v in value)

@@ -108,3 +108,78 @@ def smooth_cutting_force(v, x, vx):
     def s(u):
         return 0.5 * (1.0 + tanh(u))
     return v.F_cut * s(-vx / v.v_ramp) * s((x - v.x_cut_min) / v.x_ramp) * s((v.x_cut_max - x) / v.x_ramp)
+
+
+def andrews(v) -> EquationsOfMotion:
+    """Andrews' squeezing mechanism as the Test Set for IVP Solvers writes it (andrews.f, andfunc):
+    its mass matrix, force vector f(q, qd) and constraints g(q), typed from there, q = [beta, Theta,
+    gamma, Phi, delta, Omega, epsilon]."""
+    def mass(q):
+        coth, siph, siom = cos(q[1]), sin(q[3]), sin(q[5])
+        m = np.zeros((7, 7))
+        m[0, 0] = v.m1 * v.ra**2 + v.m2 * (v.rr**2 - 2 * v.da * v.rr * coth + v.da**2) + v.i1 + v.i2
+        m[1, 0] = m[0, 1] = v.m2 * (v.da**2 - v.da * v.rr * coth) + v.i2
+        m[1, 1] = v.m2 * v.da**2 + v.i2
+        m[2, 2] = v.m3 * (v.sa**2 + v.sb**2) + v.i3
+        m[3, 3] = v.m4 * (v.e - v.ea) ** 2 + v.i4
+        m[4, 3] = m[3, 4] = v.m4 * ((v.e - v.ea) ** 2 + v.zt * (v.e - v.ea) * siph) + v.i4
+        m[4, 4] = (v.m4 * (v.zt**2 + 2 * v.zt * (v.e - v.ea) * siph + (v.e - v.ea) ** 2)
+                   + v.m5 * (v.ta**2 + v.tb**2) + v.i4 + v.i5)
+        m[5, 5] = v.m6 * (v.zf - v.fa) ** 2 + v.i6
+        m[6, 5] = m[5, 6] = v.m6 * ((v.zf - v.fa) ** 2 - v.u * (v.zf - v.fa) * siom) + v.i6
+        m[6, 6] = (v.m6 * ((v.zf - v.fa) ** 2 - 2 * v.u * (v.zf - v.fa) * siom + v.u**2)
+                   + v.m7 * (v.ua**2 + v.ub**2) + v.i6 + v.i7)
+        return m
+
+    def forces(t, q, qd):
+        bep, thp, php, dep, omp, epp = qd[0], qd[1], qd[3], qd[4], qd[5], qd[6]
+        siga, coga = sin(q[2]), cos(q[2])
+        xd = v.sd * coga + v.sc * siga + v.xb
+        yd = v.sd * siga - v.sc * coga + v.yb
+        lang = np.hypot(xd - v.xc, yd - v.yc)
+        force = -v.c0 * (lang - v.l0) / lang
+        fx, fy = force * (xd - v.xc), force * (yd - v.yc)
+        k4, k6 = v.m4 * v.zt * (v.e - v.ea), v.m6 * v.u * (v.zf - v.fa)
+        return np.array([
+            v.mom - v.m2 * v.da * v.rr * thp * (thp + 2 * bep) * sin(q[1]),
+            v.m2 * v.da * v.rr * bep**2 * sin(q[1]),
+            fx * (v.sc * coga - v.sd * siga) + fy * (v.sd * coga + v.sc * siga),
+            k4 * dep**2 * cos(q[3]),
+            -k4 * php * (php + 2 * dep) * cos(q[3]),
+            -k6 * epp**2 * cos(q[5]),
+            k6 * omp * (omp + 2 * epp) * cos(q[5]),
+        ])
+
+    def phi(q):
+        be, ga, de, ep = q[0], q[2], q[4], q[6]
+        bt, pd, oe = q[0] + q[1], q[3] + q[4], q[5] + q[6]
+        fx, fy = v.rr * cos(be) - v.d * cos(bt), v.rr * sin(be) - v.d * sin(bt)
+        return np.array([fx - v.ss * sin(ga) - v.xb, fy + v.ss * cos(ga) - v.yb,
+                         fx - v.e * sin(pd) - v.zt * cos(de) - v.xa, fy + v.e * cos(pd) - v.zt * sin(de) - v.ya,
+                         fx - v.zf * cos(oe) - v.u * sin(ep) - v.xa, fy - v.zf * sin(oe) + v.u * cos(ep) - v.ya])
+
+    def phi_q(q):
+        sibe, cobe, siga, coga = sin(q[0]), cos(q[0]), sin(q[2]), cos(q[2])
+        side, code, siep, coep = sin(q[4]), cos(q[4]), sin(q[6]), cos(q[6])
+        sbt, cbt = sin(q[0] + q[1]), cos(q[0] + q[1])
+        spd, cpd = sin(q[3] + q[4]), cos(q[3] + q[4])
+        soe, coe = sin(q[5] + q[6]), cos(q[5] + q[6])
+        g = np.zeros((6, 7))
+        for row in (0, 2, 4):
+            g[row, 0], g[row, 1] = -v.rr * sibe + v.d * sbt, v.d * sbt
+            g[row + 1, 0], g[row + 1, 1] = v.rr * cobe - v.d * cbt, -v.d * cbt
+        g[0, 2], g[1, 2] = -v.ss * coga, -v.ss * siga
+        g[2, 3], g[2, 4] = -v.e * cpd, -v.e * cpd + v.zt * side
+        g[3, 3], g[3, 4] = -v.e * spd, -v.e * spd - v.zt * code
+        g[4, 5], g[4, 6] = v.zf * soe, v.zf * soe - v.u * coep
+        g[5, 5], g[5, 6] = -v.zf * coe, -v.zf * coe - v.u * siep
+        return g
+
+    def gamma(q, qd):
+        """-(d/dt Phi_q) qd: not in the Test Set (index 3 needs none); the directional derivative of
+        phi_q along qd by a central difference (error ~h^2 |qd|^3, used only at modest rates)."""
+        h = 1e-6
+        jdot = (phi_q(q + h * np.asarray(qd)) - phi_q(q - h * np.asarray(qd))) / (2 * h)
+        return -jdot @ qd
+
+    return EquationsOfMotion(7, 6, mass, forces, phi, phi_q, gamma, name="andrews_testset")

@@ -31,14 +31,15 @@ def _variants():
 def test_absolute_coordinates_agree_with_relative(mechanism, variant):
     """Both formulations of one description give the same motion (q mapped through the kinematics)."""
     ps = load_parameters(mechanism, variant)
+    horizon = HORIZON * mechanisms.time_scale(mechanism)
     friction = "regularized" if any(c.mu_kinetic > 0 or c.resistance > 0
                                     for c in mechanisms.equations(ps).contacts) else None
-    rel = study.simulate(mechanism, variant=variant, t_end=HORIZON, output_step=HORIZON / 10, friction=friction,
+    rel = study.simulate(mechanism, variant=variant, t_end=horizon, output_step=horizon / 10, friction=friction,
                          **REFERENCE)
     x0, xd0, _ = absolute_state(ps, rel.q[0], rel.qd[0], rel.qdd[0])
     eom_abs = mechanisms.equations(ps, "absolute")
     assert eom_abs.n_coordinates == 3 * len(mechanisms.description(ps).bodies)
-    absolute = study.simulate(eom_abs, x0, xd0, t_end=HORIZON, output_step=HORIZON / 10, friction=friction,
+    absolute = study.simulate(eom_abs, x0, xd0, t_end=horizon, output_step=horizon / 10, friction=friction,
                               **REFERENCE)
     mapped = np.array([absolute_state(ps, q, qd, qdd)[0] for q, qd, qdd in zip(rel.q, rel.qd, rel.qdd)])
     tol = tolerance("coordinate_sets_agreement", table="cross_validation")

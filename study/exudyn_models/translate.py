@@ -195,7 +195,12 @@ def _series_inputs(law: Law, d: Description, subs: dict, pos: dict, vel: dict) -
 
 
 def _point_series(d: Description, subs: dict, pos: dict, vel: dict, body: str, point: str) -> dict[str, Array]:
-    """Global position and velocity of a body point at every step from the body's COM pose and rates."""
+    """Global position and velocity of a body point (or a ground point) at every step from the body's COM
+    pose and rates."""
+    if body == GROUND:
+        x, y = (float(sp.sympify(c).xreplace(subs)) for c in d.ground_points[point])
+        n = len(next(iter(pos.values())))
+        return {"x": np.full(n, x), "y": np.full(n, y), "vx": np.zeros(n), "vy": np.zeros(n)}
     local = np.array([float(sp.sympify(c).xreplace(subs)) for c in d.bodies[body].points[point]])
     th, w = pos[body][:, 2], vel[body][:, 2]
     rx = np.cos(th) * local[0] - np.sin(th) * local[1]
@@ -471,6 +476,8 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
                                  f"positions and angles are allowed")
             groups.setdefault((inp.body, inp.point), []).append((inp.kind, sym))
         for (body, point), syms in groups.items():
+            if body == GROUND:   # the reaction on a ground point moves nothing (its inputs are read, not loaded)
+                continue
             kinds = dict(syms)
             if point is None:
                 law = Law(d, subs, [-sp.diff(pot.energy, kinds["angle"])])

@@ -45,6 +45,15 @@ def coordinate_unit(name: str) -> str:
     return getattr(module(name), "COORDINATE_UNIT", "rad")
 
 
+def time_scale(name: str) -> float:
+    """Characteristic time of a mechanism's motion [s] (its module's ``TIME_SCALE``, default 1 s).
+
+    Generic checks that run every mechanism scale their horizons and fixed steps by it, so a fast
+    mechanism (a benchmark over milliseconds) is run over a comparable part of its motion.
+    """
+    return float(getattr(module(name), "TIME_SCALE", 1.0))
+
+
 def constraint_unit(name: str) -> str:
     """Unit of a mechanism's constraint rows: 'm' (joint gaps), 'rad', or 'm, rad' when mixed."""
     rows = equations(load_parameters(name)).constraint_names

@@ -54,9 +54,10 @@ def gamma_share(eom, q, qd):
 def test_index3_keeps_inhouse_phi_at_round_off(name, variant):
     ps, eom = mechanisms.load(name, variant)
     state = mechanisms.initial_state(ps, eom)
-    r = run(ps, 0.5, 1e-3)
+    scale = mechanisms.time_scale(name)                      # 500 steps over half the mechanism's time scale
+    r = run(ps, 0.5 * scale, 1e-3 * scale)
     assert isinstance(r, SimulationResult)
-    assert r.t.shape == (501,) and r.t[-1] == pytest.approx(0.5)
+    assert r.t.shape == (501,) and r.t[-1] == pytest.approx(0.5 * scale)
     assert r.q.shape == (501, eom.n_coordinates) and r.lam.shape == (501, eom.n_constraints)
     np.testing.assert_array_equal(r.q[0], state.q)          # the in-house consistent state, mapped back
     np.testing.assert_allclose(r.qd[0], state.qd, rtol=0, atol=1e-15 * max(1.0, np.abs(state.qd).max()))
