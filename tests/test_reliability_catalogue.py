@@ -486,7 +486,7 @@ def evaluation_bound(tmp):
     return lambda: simulate(handwritten.cartesian_pendulum(), PENDULUM_Q0, PENDULUM_QD0, 10.0, max_evaluations=50)
 
 
-@entry("bounds", "fell below min_step = 0.4", error=RunBoundError)
+@entry("bounds", "steps in a row below min_step = 0.4", error=RunBoundError)
 def min_step_bound(tmp):
     return lambda: simulate(handwritten.cartesian_pendulum(), PENDULUM_Q0, PENDULUM_QD0, 10.0, min_step=0.4)
 

@@ -215,3 +215,13 @@ def test_sliding_mode_with_equal_gains_is_baumgarte_plus_switching_term():
     s = phidot + 10.0 * phi
     np.testing.assert_allclose(sm.bias(phi, phidot) - bg.bias(phi, phidot), -1e-3 * np.tanh(s / 1e-8),
                                rtol=0, atol=tolerance("round_off") * 100 * np.abs(s).max())  # terms of size ~w^2 Phi
+
+
+def test_lsoda_small_starting_steps_are_not_a_stall():
+    """LSODA starts with a ~1e-12 s step (measured: 9.6e-13 s on the quick-return); with the default
+    min_step of a 20 s run (2e-11 s) a single such step once stopped the sliding_mode study's LSODA
+    cases at t = 1e-12 s. Only min_step_run steps in a row count as a stall."""
+    from study import simulate
+
+    r = simulate("quick_return", t_end=0.05, integrator="LSODA", rtol=1e-8, atol=1e-10, min_step=2e-11)
+    assert r.t[-1] == pytest.approx(0.05)

@@ -19,6 +19,7 @@ from scipy.integrate import DOP853, LSODA, RK23, RK45, DenseOutput, OdeSolver, R
 from scipy.optimize import brentq
 
 from study.errors import RunBoundError
+from study.reference_data import tolerance
 
 Array = np.ndarray
 
@@ -159,8 +160,10 @@ def integrate(
     monitor : callable (t, y) -> None, optional
         Called at t0 and after every accepted step; it raises to stop the run (singular pose).
     min_step : float, optional
-        Smallest step an adaptive method may take before the end of the run; a smaller one stops
-        the run with a :class:`study.errors.RunBoundError` (a stall near a singularity).
+        Smallest step an adaptive method may keep taking before the end of the run: ``min_step_run``
+        (reference/tolerances.toml) accepted steps in a row below it stop the run with a
+        :class:`study.errors.RunBoundError` (a stall near a singularity). Single small steps are
+        normal: LSODA starts (and restarts after a switch) with steps of ~1e-12 s.
     describe : callable (t, y) -> str, optional
         Extra text for the error of a failed step (e.g. the singularity measure at that pose).
     """
@@ -211,6 +214,7 @@ def integrate(
     options = {"rtol": rtol, "atol": atol} if method != "RK4" else {}
     if step is not None:
         options["first_step"] = step
+    small_run, small_limit = 0, int(tolerance("min_step_run"))
     while t < t_end:
         solver = cls(lambda tt, yy: rhs(tt, yy, mode), t, y_cur, t_end, **options)
         traj.restarts += 1
@@ -221,9 +225,11 @@ def integrate(
             if solver.status == "failed":
                 raise stop(f"{message} (step size collapsed)", t_old, solver.y, getattr(solver, "h_abs", 0.0))
             h_taken = solver.t - t_old
-            if min_step is not None and solver.status == "running" and method != "RK4" and h_taken < min_step:
-                raise stop(f"the step h = {h_taken:.3g} s fell below min_step = {min_step:.3g} s (a stall: the "
-                           f"solution is near a singularity or a discontinuity; min_step= overrides)",
+            small = min_step is not None and solver.status == "running" and method != "RK4" and h_taken < min_step
+            small_run = small_run + 1 if small else 0
+            if small_run >= small_limit:
+                raise stop(f"{small_run} steps in a row below min_step = {min_step:.3g} s (the last h = {h_taken:.3g} s; "
+                           f"a stall: the solution is near a singularity or a discontinuity; min_step= overrides)",
                            solver.t, solver.y, h_taken)
             traj.steps += 1
             dense = solver.dense_output()
