@@ -16,7 +16,8 @@ Every case of one set has the same horizon and output step, so all comparisons u
 ``exudyn_agreement``
     one row per Exudyn run and per in-house method run: max |dq|, max |dqd|, max |dF_friction|,
     max |dN|, max |dlam| against the set's reference and the observed orders between successive h
-    of the same solver (no timing);
+    of the same solver (no timing); ``reference_switches`` counts the switches the reference located
+    (a switched load law, e.g. an on/off force: Exudyn cannot locate them, see the report section);
 ``exudyn_agreement_timing``
     the same keys with the CPU seconds of the run and of the in-house reference;
 ``exudyn_reactions``
@@ -223,7 +224,8 @@ def summarize(cases: list[Case], load: Callable[[Case], SimulationResult]) -> di
                 cpu = float(run.stats.get("cpu_seconds", math.nan))
                 extra = {"newton_iterations": np.nan}
             dev = deviations(run, ref)
-            rows.append({**base, **dev, "max_abs_phi": float(np.abs(run.phi).max()), **extra})
+            rows.append({**base, **dev, "max_abs_phi": float(np.abs(run.phi).max()), **extra,
+                         "reference_switches": int(ref.stats.get("events", 0))})
             timing.append({**base, "cpu_seconds": cpu, "inhouse_reference_cpu_seconds": ref_cpu,
                            "steps": int(run.stats.get("steps", 0))})
             if frictionless and case.engine == "exudyn":
