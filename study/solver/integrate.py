@@ -98,7 +98,7 @@ def _first_crossing(g: Callable[[float], float], sign: int, t_lo: float, t_hi: f
 
     Normally g(t_lo) is on the side ``sign`` and Brent's method brackets [t_lo, t_hi]. The step can
     also start on the far side: right after a located switch g(t_lo) is zero up to round-off and may
-    carry the old sign, and a post-step projection moves the state (x_D by ~1e-6 m at rtol 1e-4) and
+    carry the old sign, and a post-step projection moves the state (a position by ~1e-6 m at rtol 1e-4) and
     can take it back across the switching surface. Then g is sampled at ``SCAN_POINTS`` points:
 
     * if it comes back to the side ``sign`` and leaves it again within the step (a second crossing,
