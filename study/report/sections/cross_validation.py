@@ -310,7 +310,8 @@ def section(ctx: ReportContext) -> list[str]:
         "Exudyn's joint reaction inside a user function. Each run is compared with an in-house high-accuracy "
         "reference (DOP853, rtol 1e-12, projection) on common samples every 0.01 s; ‘order’ is log(e(h')/e(h))/"
         "log(h'/h) against the next larger step h' of the same solver. The last row of each set is an in-house "
-        "method for comparison: RK45 at rtol 1e-8, or fixed-step RK4 at Exudyn's largest step where adaptive steps straddle a smooth law's ramps (those failed the perturbation check). CPU seconds are machine-dependent "
+        "method for comparison: RK45 at rtol 1e-8, or fixed-step RK4 at Exudyn's largest step where adaptive "
+        "steps straddle a smooth law's ramps (those failed the perturbation check). CPU seconds are machine-dependent "
         "(from `timing/exudyn_agreement_timing.csv`).", "",
     ]
     header = ["mechanism", "variant", "friction", "t_end [s]", "solver", "h [s]", "max|dq| [rad]",
