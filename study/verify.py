@@ -283,10 +283,10 @@ def perturbation_check(reports_dir: Path, cache_root: Path, studies: Sequence[st
                     part.insert(0, "perturb_ulps", k)
                     part.insert(0, "study", cl.study)
                     parts.append(part)
-    result = pd.concat(parts, ignore_index=True)
-    result = result.drop(columns=["worst_row", "note"])
+    full = pd.concat(parts, ignore_index=True)
+    result = full.drop(columns=["worst_row", "note"])
     write_tables({"perturbation_check": result}, reports_dir)
-    _print(worst_per_table(result), result, f"perturbation check ({', '.join(f'{k:+d}' for k in ulps)} ulps)",
+    _print(worst_per_table(result), full, f"perturbation check ({', '.join(f'{k:+d}' for k in ulps)} ulps)",
            sys.stdout)
     return bool(result["passed"].all()), result
 

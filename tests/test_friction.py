@@ -14,7 +14,7 @@ from study import EquationsOfMotion, SlidingContact, simulate
 from study.mechanisms import load
 from study.reference_data import tolerance
 from study.solver.accelerations import make_acceleration_solver
-from study.solver.friction import FrictionDynamics, PainleveError, make_friction
+from study.solver.friction import FrictionDynamics, FrictionLawError, PainleveError, make_friction
 from study.solver.stabilization import make_stabilization
 from study.studies.slider_crank import holding_forces, paper_method
 
@@ -194,6 +194,42 @@ def test_block_reverses_when_it_cannot_stick():
     x_rev = v0 * t_rev / 2
     a_back = (P + mu * m * g) / m
     assert r.q[-1, 0] == pytest.approx(x_rev + a_back * (T - t_rev) ** 2 / 2, abs=tol("block_position"))
+
+
+@pytest.mark.parametrize("reading", ["holds", "sliding_only"])
+def test_block_at_rest_between_static_limit_and_kinetic_resistance(reading):
+    """Issue 13: a push P = -4 N between mu_s m g = 3 N and R + mu_k m g = 5 N, block launched against it.
+
+    It stops at t* = v0 m / (R + mu m g - P) = 1/9 s (hand value). 'holds': the limit R + mu_s m g = 5 N
+    holds it. 'sliding_only': the limit is 3 N < 4 N, so it cannot stick, and sliding back meets
+    R + mu_k m g = 5 N > 4 N, which stops it at once: no consistent mode, a FrictionLawError at t*
+    (it used to restart forever at t*, as the slider-crank 'slip_then_stick' case did at 4.434 s)."""
+    m, g, mu, R, P, v0 = 1.0, 10.0, 0.3, 2.0, -4.0, 1.0
+    t_stop = v0 * m / (R + mu * m * g - P)
+    eom = block(m, g, mu, mu, R, push=lambda t: P)
+    if reading == "holds":
+        r = simulate(eom, [0.0, 0.0], [v0, 0.0], t_end=0.5, resistance_reading=reading, **EXACT)
+        tr = [x for x in r.stats["friction_transitions"] if x["contact"]]
+        assert [(x["from"], x["to"]) for x in tr] == [("slip+", "stick")]
+        assert tr[0]["t"] == pytest.approx(t_stop, abs=tol("event_time"))
+        return
+    with pytest.raises(FrictionLawError, match="no consistent mode.*sliding_only") as exc:
+        simulate(eom, [0.0, 0.0], [v0, 0.0], t_end=0.5, resistance_reading=reading, **EXACT)
+    assert exc.value.t == pytest.approx(t_stop, abs=tol("event_time"))
+    assert "|f_req| = 4 N" in str(exc.value) and "static limit 3 N" in str(exc.value)
+
+
+def test_slider_crank_slip_then_stick_sliding_only_stops_with_a_clear_error():
+    """The case that used to run forever: the slider comes to rest at 4.434 s needing 9.06 N, above the
+    'sliding_only' static limit mu_s |N| = 4.0 N and below the kinetic force R + mu_k |N| = 9.5 N. Both
+    readings slide identically until then, so the error comes at the instant the 'holds' run sticks."""
+    options = dict(variant="slip_then_stick", t_end=6.0, method="projection", integrator="DOP853", rtol=1e-10,
+                   atol=1e-12, friction="exact")
+    with pytest.raises(FrictionLawError, match="no consistent mode") as exc:
+        simulate("slider_crank", resistance_reading="sliding_only", **options)
+    held = simulate("slider_crank", resistance_reading="holds", **options)
+    sticks = [x["t"] for x in held.stats["friction_transitions"] if x["contact"] and x["to"] == "stick"]
+    assert exc.value.t == pytest.approx(sticks[0], abs=tol("event_time"))
 
 
 # --- regularized -> exact --------------------------------------------------------------------------

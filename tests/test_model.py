@@ -1,5 +1,7 @@
 """Builder-derived equations: Jacobians, mass matrix, agreement with hand-written equations."""
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -118,15 +120,24 @@ def test_cutting_force_generalized_like_paper_b_matrix():
 
 
 def test_on_off_cutting_law_indicators_and_modes():
+    """The three switching functions against hand kinematics of D (x_D = l2 cos q2 + l3 cos q3), and the
+    cut's generalized force F_cut dx_D/dq in the one mode that switches it on (v_D < 0 inside the window)."""
     ps, eom = load("quick_return", "seed")
-    q = initial_state(ps, eom)
-    v_d, lo, hi = eom.indicators(0.0, q.q, q.qd)
-    x_d = eom.points["ram.D"](q.q)[0]
-    assert lo == pytest.approx(x_d - ps.x_cut_min) and hi == pytest.approx(ps.x_cut_max - x_d)
-    cut_on = eom.applied_forces(0.0, q.q, q.qd, mode=(-1, 1, 1))["cutting"]
-    cut_off = eom.applied_forces(0.0, q.q, q.qd, mode=(1, 1, 1))["cutting"]
-    assert not np.any(cut_off)
-    assert cut_on[1] == pytest.approx(-ps.l2 * np.sin(q.q[1]) * ps.F_cut)
+    st = initial_state(ps, eom)
+    g_tol = tolerance("switching_function_round_off")
+    for q, qd in [(st.q, st.qd), (st.q, -st.qd)]:          # the ram moving either way
+        v_d, lo, hi = eom.indicators(0.0, q, qd)
+        x_d = ps.l2 * np.cos(q[1]) + ps.l3 * np.cos(q[2])
+        v_hand = -ps.l2 * np.sin(q[1]) * qd[1] - ps.l3 * np.sin(q[2]) * qd[2]
+        assert abs(v_d - v_hand) <= g_tol and v_hand != 0.0
+        assert abs(lo - (x_d - ps.x_cut_min)) <= g_tol and abs(hi - (ps.x_cut_max - x_d)) <= g_tol
+    dx_dq = np.array([0.0, -ps.l2 * np.sin(st.q[1]), -ps.l3 * np.sin(st.q[2])])
+    for mode in itertools.product((-1, 1), repeat=3):
+        cut = eom.applied_forces(0.0, st.q, st.qd, mode=mode)["cutting"]
+        if mode == (-1, 1, 1):
+            np.testing.assert_allclose(cut, ps.F_cut * dx_dq, rtol=tolerance("round_off"), atol=0)
+        else:
+            assert not np.any(cut), mode
 
 
 def test_generated_code_is_cached(tmp_path, monkeypatch):

@@ -256,14 +256,14 @@ summary = "x"
 [[group]]
 name = "g"
 mechanism = "quick_return"
-t_end = "@cross_validation:order_horizon"
+t_end = "@cross_validation:cut_horizon"
 options = { rtol = "@reference_rtol" }
 sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:friction_eps" }] }
 """)
     from study.reference_data import tolerance
 
     (case,) = pl.load_case_list(path).cases
-    assert case.t_end == tolerance("order_horizon", table="cross_validation")
+    assert case.t_end == tolerance("cut_horizon", table="cross_validation")
     assert case.kwargs == {"rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol"),
                            "eps": tolerance("friction_eps", table="cross_validation")}
     _write(tmp_path, path.read_text().replace("@reference_rtol", "@no_such_entry"))

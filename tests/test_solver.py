@@ -225,3 +225,45 @@ def test_lsoda_small_starting_steps_are_not_a_stall():
 
     r = simulate("quick_return", t_end=0.05, integrator="LSODA", rtol=1e-8, atol=1e-10, min_step=2e-11)
     assert r.t[-1] == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize("method,integrator,rtol,t_end", [
+    ("none", "DOP853", 1e-5, 1.0),          # a step spans the ram's reversal and starts on a just-located switch
+    ("projection", "RK45", 1e-4, 0.5),      # the projection moves x_D back across x_max after the cut switched on
+])
+def test_switches_located_at_loose_tolerances(method, integrator, rtol, t_end):
+    """Issue 13: at rtol 1e-4 / 1e-5 a step could start on the far side of a switching surface (round-off
+    after a located switch, or a post-step projection) and Brent's method had no bracket. Without
+    projection every sample's mode must equal the signs of the switching functions evaluated on that
+    sample's state (with projection the sample is projected after the mode is read, which may move it
+    across a surface by the projection's correction); every switch of an accurate run (DOP853 at the
+    reference tolerance) must have been located."""
+    from study.simulate import build_dynamics
+    from study.solver.integrate import integrate
+
+    ps, eom = load("quick_return", "seed")
+    st = initial_state(ps, eom)
+    m = eom.n_coordinates
+
+    def g(t, y):
+        return np.asarray(eom.indicators(t, y[:m], y[m:2 * m]))
+
+    def run(method, integrator, rtol, atol):
+        dyn, y0, _ = build_dynamics(eom, st.q, st.qd, method=method, acceleration_solver="multiplier", friction=None,
+                                    friction_eps=1e-3, friction_sgn="tanh")
+        post = None
+        if dyn.stabilization.projects:
+            def post(y):
+                q, qd, changed = dyn.stabilization.project(eom, y[:m], y[m:2 * m])
+                return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
+        return integrate(dyn.rhs, 0.0, y0, t_end, np.linspace(0.0, t_end, 1001), method=integrator, rtol=rtol,
+                         atol=atol, indicators=g, post_step=post)
+
+    loose = run(method, integrator, rtol, rtol / 100)
+    accurate = run("projection", "DOP853", tolerance("reference_rtol"), tolerance("reference_atol"))
+    for t, y, mode in zip(loose.t, loose.y, loose.modes) if method == "none" else ():
+        assert tuple(np.where(g(t, y) >= 0, 1, -1)) == tuple(mode), (t, g(t, y), mode)
+    # every switch of the accurate run has a located counterpart (same indicator, same new sign)
+    loose_switches = {(e["indicator"], e["new_sign"]) for e in loose.events}
+    assert {(e["indicator"], e["new_sign"]) for e in accurate.events} <= loose_switches
+    assert len(loose.events) >= len(accurate.events)

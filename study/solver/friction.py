@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from study.errors import SimulationError
 from study.solver.dynamics import Dynamics
 from study.solver.stabilization import SIGN_FUNCTIONS
 
@@ -87,6 +88,10 @@ class PainleveError(RuntimeError):
         super().__init__(message)
         self.contacts, self.t, self.mu, self.consistent = contacts, t, mu, consistent
         self.singular = singular
+
+
+class FrictionLawError(SimulationError):
+    """A contact at rest can neither stick nor slide consistently (static limit below the kinetic force)."""
 
 
 # --- treatments -------------------------------------------------------------------------------
@@ -525,10 +530,40 @@ class StickSlipSwitching:
             new[e] = 1
         else:
             new[e], new[e + 1] = -1, self._free_direction(t, q, qd, mode, j)
+            if held is not None:
+                self._check_slip_starts(t, q, qd, tuple(new), j, held)
         new = tuple(new)
         if record and new != tuple(mode):  # a contact found again at rest in its own direction is no transition
             self._log(t, j, was, new, held)
         return new
+
+    def _check_slip_starts(self, t, q, qd, new, j, held) -> None:
+        """Raise :class:`FrictionLawError` if contact j, too weakly held to stick, cannot slide either.
+
+        Sliding in direction d (the way the other forces push) is consistent only if the contact then
+        accelerates that way, d a_t >= 0. With a static limit below the kinetic resistance (reading
+        'sliding_only' with R > 0, or mu_s < mu_k) a required force between the two leaves no
+        consistent mode: held, the limit is exceeded; sliding, the kinetic force R + mu_k |N| exceeds the
+        push and stops the contact at once. Without this check the integrator would locate a new stop
+        after every restart at the same instant, forever (the Zeno limit of those restarts is a contact
+        held by the kinetic force, i.e. the reading 'holds').
+        """
+        dyn, ct = self.dyn, self.dyn.eom.contacts[j]
+        slide = dyn.contact_solution(t, q, qd, new)
+        d = new[self._entry(j) + 1]
+        a_t = float(ct.tangent_jacobian(q) @ slide.qdd + ct.tangent_bias(q, qd))
+        scale = float(np.abs(ct.tangent_jacobian(q) @ held.qdd).max() + abs(ct.tangent_bias(q, qd)))
+        if d * a_t >= -CONSISTENCY_RTOL * max(scale, abs(a_t)):
+            return
+        kinetic = float(abs(slide.friction[j]))
+        raise FrictionLawError(
+            f"contact {ct.name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
+            f"|f_req| = {abs(float(held.friction[j])):.6g} N, above its static limit {float(dyn.static_limit(held.normal)[j]):.6g} N "
+            f"(resistance_reading {dyn.law.resistance_reading!r}), but sliding {'+' if d > 0 else '-'} meets the kinetic "
+            f"force {kinetic:.6g} N (R + mu_k |N|), which decelerates it (a_t = {a_t:.3g} m/s^2 against the sliding "
+            f"direction). A static limit below the kinetic resistance makes the law inconsistent here; use "
+            f"resistance_reading 'holds' (the contact stays at rest, held by R + mu_s |N|) or a regularized law",
+            t=float(t), quantity="friction", contact=ct.name)
 
     def _log(self, t, j, was, new, held):
         dyn, name = self.dyn, self.dyn.eom.contacts[j].name

@@ -91,6 +91,39 @@ BRENT_XTOL, BRENT_RTOL = 1e-14, 4 * np.finfo(float).eps
 MAX_EVENTS = 100_000  # more switches than this in one run means chattering on a switching surface
 
 
+SCAN_POINTS = 16  # interpolant samples that find the return to the mode's side (see _first_crossing)
+
+
+def _first_crossing(g: Callable[[float], float], sign: int, t_lo: float, t_hi: float) -> float:
+    """The first time in [t_lo, t_hi] at which g leaves the side ``sign`` (g(t_hi) * sign < 0).
+
+    Normally g(t_lo) is on the side ``sign`` and Brent's method brackets [t_lo, t_hi]. The step can
+    also start on the far side: right after a located switch g(t_lo) is zero up to round-off and may
+    carry the old sign, and a post-step projection moves the state (a position by ~1e-6 m at rtol 1e-4) and
+    can take it back across the switching surface. Then g is sampled at ``SCAN_POINTS`` points:
+
+    * if it comes back to the side ``sign`` and leaves it again within the step (a second crossing,
+      seen at loose tolerances where a step spans a reversal), that later crossing is bracketed;
+    * if it stays on the far side throughout, the switch is at t_lo: the state the step starts from
+      is already across, so the mode flips there.
+
+    Raises ValueError (from brentq) only if no bracket exists at all.
+    """
+    if g(t_lo) * sign >= 0:
+        return brentq(g, t_lo, t_hi, xtol=BRENT_XTOL, rtol=BRENT_RTOL)
+    ts = np.linspace(t_lo, t_hi, SCAN_POINTS + 1)
+    side = np.array([g(s) * sign for s in ts])
+    back = np.flatnonzero(side[1:] >= 0)
+    if back.size == 0:
+        return t_lo
+    j = back[0] + 1
+    away = np.flatnonzero(side[j:] < 0)
+    if away.size == 0:
+        raise ValueError(f"the interpolant returns to the side {sign:+d} at t = {ts[j]:.9g} s and stays there")
+    leave = j + away[0]
+    return brentq(g, ts[leave - 1], ts[leave], xtol=BRENT_XTOL, rtol=BRENT_RTOL)
+
+
 @dataclass
 class Trajectory:
     """Raw integrator output: samples, the mode at each sample, events and statistics."""
@@ -238,8 +271,8 @@ def integrate(
                 flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
                 if flipped:
                     try:
-                        roots = [(brentq(lambda s, i=i: indicators(s, dense(s))[i], t_old, solver.t,
-                                         xtol=BRENT_XTOL, rtol=BRENT_RTOL), i) for i in flipped]
+                        roots = [(_first_crossing(lambda s, i=i: indicators(s, dense(s))[i], mode[i], t_old,
+                                                  solver.t), i) for i in flipped]
                     except ValueError as exc:  # no sign change on the step's interpolant: it is not resolved
                         raise stop(f"the switch of switching function(s) {flipped} cannot be located within the "
                                    f"step from t = {t_old:.9g} s ({exc}): the step h = {solver.t - t_old:.3g} s is too "

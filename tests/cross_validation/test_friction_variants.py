@@ -48,15 +48,15 @@ def error_table(mechanism, variant, t_end, solver, steps, eps=None):
     return [deviations(exudyn(mechanism, variant, t_end, h, solver, eps), ref) for h in steps]
 
 
-def check_orders(rows, steps, keys, band_center=2.0):
-    """Every error above the floor, every observed order in the band; returns the orders."""
-    band, floor = tol("order_band"), tol("order_error_floor")
+def check_orders(rows, steps, keys):
+    """Every error above the floor, every observed order >= min_order; returns the orders."""
+    low, floor = tol("min_order"), tol("order_error_floor")
     out = {}
     for key in keys:
         e = [row[key] for row in rows]
         assert min(e) > floor, f"{key}: errors {e} reach the accuracy floor {floor}"
         p = observed_orders(steps, e)
-        assert np.all(np.abs(p - band_center) <= band), f"{key}: errors {e}, observed orders {p}"
+        assert np.all(p >= low), f"{key}: errors {e}, observed orders {p}"
         out[key] = p
     return out
 
@@ -84,21 +84,24 @@ def test_slider_crank_friction_variant_order_two(variant, horizon, solver):
     check_orders(rows, steps, QUANTITIES)
 
 
+GUIDE_FRICTION_STEPS = {  # index 3 stops at 1e-4 s: see index3_newton_floor_time
+    "index3": lambda h: [h, 0.8 * h],
+    "index2": lambda h: [h, h / 2, h / 4],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("horizon", ["cut_window", "cut_horizon"])
 @pytest.mark.parametrize("solver", ["index3", "index2"])
-def test_quick_return_guide_friction_order_two(solver):
-    """Ram-guide friction (smooth cut, before the cut switches on): q and qd at order 2; the forces
-    at order 2 with index 2, faster than first order with index 3 (multiplier initial layer)."""
-    steps = steps_from("quick_return_friction_steps")
-    rows = error_table("quick_return", "guide_friction", tol("friction_horizon_guide_friction"), solver, steps)
-    check_orders(rows, steps, ("max_abs_dq", "max_abs_dqd"))
-    forces = ("max_abs_dF_friction", "max_abs_dN")
-    if solver == "index2":
-        check_orders(rows, steps, forces)
-    else:
-        for key in forces:
-            e = [row[key] for row in rows]
-            overall = observed_orders([steps[0], steps[-1]], [e[0], e[-1]])[0]
-            assert overall > tol("index3_force_min_order"), f"{key}: errors {e}, overall order {overall}"
+def test_quick_return_guide_friction_through_the_cut_order_two(solver, horizon):
+    """Ram-guide friction with the smooth cut, through the first cut (cut_window) and five cuts
+    (cut_horizon), friction eps = quick_return_friction_eps and steps cut_steps that resolve both the
+    x-ramp and the friction's turn-over at the ram's reversals: q, qd, friction and normal force at
+    order >= min_order with both solvers."""
+    steps = GUIDE_FRICTION_STEPS[solver](tol("cut_steps"))
+    rows = error_table("quick_return", "guide_friction", tol(horizon), solver, steps,
+                       eps=tol("quick_return_friction_eps"))
+    check_orders(rows, steps, QUANTITIES)
 
 
 @pytest.mark.slow
@@ -127,3 +130,14 @@ def test_stiff_regularization_documented_limit():
     steps = [1e-3, 5e-4, 2.5e-4]
     rows = [deviations(exudyn("slider_crank", "slip_then_stick", t_end, h, "index2", eps), ref) for h in steps]
     check_orders(rows, steps, QUANTITIES)
+
+
+@pytest.mark.slow
+def test_index3_guide_friction_newton_floor_documented_limit():
+    """Documented limit (index3_newton_floor_time): with ram-guide friction, Exudyn index 3 at h = 6.25e-5 s
+    stalls on Newton's round-off floor at t = 0.8933 s, which is why its guide_friction rows stop at 1e-4 s."""
+    h = tol("cut_steps") / 2
+    with pytest.raises(ExudynSolverError) as failure:
+        exudyn("quick_return", "guide_friction", tol("cut_horizon"), h, "index3", tol("quick_return_friction_eps"))
+    note = " ".join(getattr(failure.value, "__notes__", []))
+    assert abs(float(note.rsplit("t = ", 1)[1]) - tol("index3_newton_floor_time")) <= h, note

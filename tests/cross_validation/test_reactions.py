@@ -46,7 +46,7 @@ def deviations(mechanism, variant, t_end, solver, steps):
 
 CASES = [
     # mechanism, variant, horizon [s], largest step
-    ("quick_return", "smooth_cutting", tol("order_horizon"), tol("quick_return_friction_steps")),
+    ("quick_return", "smooth_cutting", tol("cut_window"), tol("cut_steps")),
     ("slider_crank", "sustained_sliding", tol("friction_horizon_sustained_sliding"),
      tol("slider_crank_friction_steps")),
 ]
@@ -54,31 +54,34 @@ CASES = [
 
 @pytest.mark.parametrize("mechanism,variant,t_end,h", CASES)
 def test_index2_reactions_converge_at_order_two(mechanism, variant, t_end, h):
-    """Every prismatic multiplier and every revolute-joint force component: order 2 with index 2."""
+    """Every prismatic multiplier and every revolute-joint force component: order >= min_order with
+    index 2 (the quick-return through its first cut)."""
     steps = [h, h / 2, h / 4]
     rows = deviations(mechanism, variant, t_end, "index2", steps)
     expected = {"slider_crank": {"lam1", "joint_guide_n"} | {f"joint_{j}_{c}" for j in "OAB" for c in "xy"},
                 "quick_return": {"lam1", "lam2", "joint_block_on_rocker_n", "joint_ram_guide_n"}
                 | {f"joint_{j}_{c}" for j in "OPAED" for c in "xy"}}[mechanism]
     assert set(rows[0]) == expected
-    band, floor = tol("order_band"), tol("order_error_floor")
+    low, floor = tol("min_order"), tol("order_error_floor")
     for quantity in sorted(expected):
         e = [row[quantity][0] for row in rows]
         assert min(e) > floor, (quantity, e)
         p = observed_orders(steps, e)
-        assert np.all(np.abs(p - 2.0) <= band), f"{quantity}: errors {e}, orders {p}"
+        assert np.all(p >= low), f"{quantity}: errors {e}, orders {p}"
 
 
-def test_index3_reactions_quick_return_faster_than_first_order():
-    """Index-3 reactions carry the multipliers' O(h) initial layer: over h -> h/4 they converge
-    faster than first order (the orders between successive h vary, see index3_force_min_order)."""
+def test_index3_reactions_quick_return_order_two_through_the_cut():
+    """Index-3 reactions of the quick-return through the first cut, at steps that resolve the smooth
+    law (cut_steps): every prismatic multiplier and revolute-joint force at order >= min_order."""
     mechanism, variant, t_end, h = CASES[0]
     steps = [h, h / 2, h / 4]
     rows = deviations(mechanism, variant, t_end, "index3", steps)
+    low, floor = tol("min_order"), tol("order_error_floor")
     for quantity in sorted(rows[0]):
         e = [row[quantity][0] for row in rows]
-        overall = observed_orders([steps[0], steps[-1]], [e[0], e[-1]])[0]
-        assert overall > tol("index3_force_min_order"), f"{quantity}: errors {e}, overall order {overall}"
+        assert min(e) > floor, (quantity, e)
+        p = observed_orders(steps, e)
+        assert np.all(p >= low), f"{quantity}: errors {e}, orders {p}"
 
 
 def test_index3_reactions_slider_crank_round_off_floor():

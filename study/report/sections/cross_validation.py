@@ -35,9 +35,9 @@ def _report_choices(ctx: ReportContext) -> tuple[list[str], list[str]]:
     cl = ctx.case_lists.get(STUDY)
     choices = cl.report if cl is not None else {}
     return list(choices.get("time_series", [])), list(choices.get("reactions", []))
-# Orders further from 2 than the tests' order band are listed as disagreements; force deviations
-# below the index-3 round-off floor (a fraction of the largest force) are called round-off.
-ORDER_NOTE = tolerance("order_band", table="cross_validation")
+# Orders below the tests' lower bound are listed as disagreements; force deviations below the
+# index-3 round-off floor (a fraction of the largest force) are called round-off.
+MIN_ORDER = tolerance("min_order", table="cross_validation")
 ROUND_OFF_RELATIVE = tolerance("index3_reaction_floor_relative", table="cross_validation")
 
 
@@ -213,8 +213,15 @@ def _agreement_rows(agree: pd.DataFrame, timing: pd.DataFrame | None) -> list[li
     return rows
 
 
+def _switched(agree: pd.DataFrame) -> pd.Series:
+    """Rows of sets whose reference located switches of an on/off load law (no order expected)."""
+    if "reference_switches" not in agree.columns:
+        return pd.Series(False, index=agree.index)
+    return agree.reference_switches.fillna(0) > 0
+
+
 def _order_summary(agree: pd.DataFrame) -> list[str]:
-    exu = agree[agree.engine == "exudyn"]
+    exu = agree[(agree.engine == "exudyn") & ~_switched(agree)]
     lines = []
     for col, what in (("order_dq", "q"), ("order_dqd", "q̇"), ("order_dF_friction", "friction force"),
                       ("order_dN", "normal force")):
@@ -222,16 +229,16 @@ def _order_summary(agree: pd.DataFrame) -> list[str]:
             vals = exu[(exu.solver == solver)][col].dropna()
             if len(vals):
                 lines.append(f"- {what}, {solver}: observed orders from {fmt_number(vals.min())} to {fmt_number(vals.max())} "
-                             f"({len(vals)} step halvings over all variants).")
+                             f"({len(vals)} step refinements over every set without an on/off load).")
     return lines
 
 
 def _disagreements(agree: pd.DataFrame, react: pd.DataFrame | None) -> list[str]:
     lines = []
-    exu = agree[agree.engine == "exudyn"]
-    low = exu[(exu.order_dN - 2.0).abs() > ORDER_NOTE].dropna(subset=["order_dN"])
+    exu = agree[(agree.engine == "exudyn") & ~_switched(agree)]
+    low = exu[exu.order_dN < MIN_ORDER].dropna(subset=["order_dN"])
     for r in low.itertuples(index=False):
-        why = ("round-off floor of the index-3 multipliers (the error grows as h shrinks)" if r.order_dN < 0.5 * ORDER_NOTE
+        why = ("round-off floor of the index-3 multipliers (the error grows as h shrinks)" if r.order_dN < 0.5 * MIN_ORDER
                or r.max_abs_dN < ROUND_OFF_RELATIVE * r.max_abs_N_ref else "the O(h) initial layer of index-3 multipliers")
         lines.append(f"- {_mech(r.mechanism)} {r.variant} ({r.friction}), {r.solver}, h = {fmt_number(r.h)} s: the normal "
                      f"force converges at order {fmt_number(r.order_dN)} (max|dN| = {fmt_number(r.max_abs_dN)} N, "
@@ -251,6 +258,43 @@ def _disagreements(agree: pd.DataFrame, react: pd.DataFrame | None) -> list[str]
     return lines
 
 
+def _switched_law(agree: pd.DataFrame) -> list[str]:
+    """Table and explanation for the sets with an on/off load: Exudyn's error against h next to the
+    in-house run that locates the switches."""
+    sub = agree[_switched(agree)]
+    if not len(sub):
+        return []
+    lines = []
+    for (mech, variant), rows in sub.groupby(["mechanism", "variant"], sort=True):
+        exu = rows[rows.engine == "exudyn"]
+        table = []
+        for r in rows.itertuples(index=False):
+            table.append([r.solver, fmt_number(r.h), fmt_number(r.max_abs_dq), fmt_number(r.max_abs_dqd),
+                          fmt_number(r.order_dq), fmt_number(r.order_dqd)])
+        overall = []
+        for solver in ("index3", "index2"):
+            s = exu[exu.solver == solver].sort_values("h", ascending=False)
+            if len(s) >= 2:
+                p = np.log(s.max_abs_dq.iloc[0] / s.max_abs_dq.iloc[-1]) / np.log(s.h.iloc[0] / s.h.iloc[-1])
+                overall.append(f"{solver} {fmt_number(p)} (successive orders {fmt_number(s.order_dq.min())} to "
+                               f"{fmt_number(s.order_dq.max())})")
+        inhouse = rows[rows.engine != "exudyn"]
+        t_end = fmt_number(rows.t_end.iloc[0])
+        lines += [f"{_mech(mech)} `{variant}` (on/off load law, {int(rows.reference_switches.iloc[0])} switches located by "
+                  f"the reference in {t_end} s): Exudyn's error against h, and the in-house run that locates the "
+                  f"switches (max over common samples every 0.01 s):", "",
+                  md_table(["solver", "h [s]", "max|dq| [rad]", "max|dq̇| [rad/s]", "order q", "order q̇"], table,
+                           [False] + [True] * 5), ""]
+        lines += ["Exudyn evaluates the on/off force at the states of its steps, so each switch is taken at a step "
+                  "boundary instead of its instant: a force jump F applied up to one step early or late changes the "
+                  "momentum by up to F h per switch, an O(h) error whose size depends on where the switch falls "
+                  "inside the step. The error is therefore first order at best and erratic against h: overall order "
+                  "from the largest to the smallest h " + ", ".join(overall) + ". "
+                  + (f"The in-house run with located switches ({inhouse.solver.iloc[0]}) is at max|dq| = "
+                     f"{fmt_number(inhouse.max_abs_dq.iloc[0])} rad." if len(inhouse) else ""), ""]
+    return lines
+
+
 def section(ctx: ReportContext) -> list[str]:
     lines = ["## In-house vs Exudyn", ""]
     agree = ctx.table("exudyn_agreement")
@@ -264,16 +308,18 @@ def section(ctx: ReportContext) -> list[str]:
         "index-3 constraints (`index3`) and by Newmark/trapezoidal with index-2 constraints (`index2`). "
         "Friction is the regularized law −(F + μ|N|) tanh(v/ε) with the same ε on both sides, N read from "
         "Exudyn's joint reaction inside a user function. Each run is compared with an in-house high-accuracy "
-        "reference (DOP853, rtol 1e-12, projection) on common samples every 0.01 s; ‘order’ is log(e(2h)/e(h))/"
-        "log 2 against the next larger step of the same solver. The last row of each set is an in-house "
-        "method at everyday settings (RK45, rtol 1e-8) for comparison. CPU seconds are machine-dependent "
+        "reference (DOP853, rtol 1e-12, projection) on common samples every 0.01 s; ‘order’ is log(e(h')/e(h))/"
+        "log(h'/h) against the next larger step h' of the same solver. The last row of each set is an in-house "
+        "method for comparison: RK45 at rtol 1e-8, or fixed-step RK4 at Exudyn's largest step where adaptive "
+        "steps straddle a smooth law's ramps (those failed the perturbation check). CPU seconds are machine-dependent "
         "(from `timing/exudyn_agreement_timing.csv`).", "",
     ]
     header = ["mechanism", "variant", "friction", "t_end [s]", "solver", "h [s]", "max|dq| [rad]",
               "max|dq̇| [rad/s]", "max|dF| [N]", "max|dN| [N]", "order q", "order q̇", "order F", "order N",
               "CPU [s]", "CPU in-house ref [s]"]
     lines += [md_table(header, _agreement_rows(agree, timing), [False] * 3 + [True] * 13), ""]
-    lines += ["Observed orders (Exudyn, every variant):", ""] + _order_summary(agree) + [""]
+    lines += ["Observed orders (Exudyn, every set without an on/off load):", ""] + _order_summary(agree) + [""]
+    lines += _switched_law(agree)
     lines += ["Disagreements and limits (numbers from the tables):", ""] + _disagreements(agree, react) + [""]
     notes = _report_notes(ctx)
     if notes:
