@@ -105,11 +105,13 @@ class SingularityMonitor:
 
     def check(self, t: float, q: Array) -> None:
         """Raise SingularConfigurationError if rho(q) < ratio, or if the step since the last call crossed a
-        singular pose: a direction of the constraints' row space reversed, i.e. the symmetric part of
-        J J_last^T has an eigenvalue <= 0 (a small step reverses a row direction only by passing
-        through a rank drop; a step can jump over the pose itself). The symmetric part, not the
-        determinant: an even number of rows vanishing together (parallel windows of a linkage that all
-        flatten at once) turns the determinant over twice and leaves it positive."""
+        singular pose: a direction of the constraints' row space reversed, i.e. J J_last^T has an
+        eigenvalue with real part <= 0 (a small step reverses a row direction only by passing through a
+        rank drop; a step can jump over the pose itself). For J = D J_last (rows rescaled by D) the
+        eigenvalues of D (J_last J_last^T) have the signs of D's entries (Sylvester's law of inertia),
+        so rows that shrink without reversing are not reported. The eigenvalues, not the determinant:
+        an even number of rows vanishing together (parallel windows of a linkage that all flatten at
+        once) turns the determinant over twice and leaves it positive."""
         if self.eom.n_constraints == 0:
             return
         J = np.asarray(self.eom.phi_q(q), dtype=float)
@@ -118,7 +120,7 @@ class SingularityMonitor:
         reversed_ = 0
         if self._last is not None:
             C = J @ self._last[1].T
-            reversed_ = int(np.sum(np.linalg.eigvalsh(0.5 * (C + C.T)) <= 0))
+            reversed_ = int(np.sum(np.linalg.eigvals(C).real <= 0))
         if not rho >= self.ratio or reversed_:
             r, rank = self.eom.n_constraints, self.rank(J)
             where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: {reversed_} direction(s) of the "
