@@ -123,8 +123,8 @@ class SingularityMonitor:
             reversed_ = int(np.sum(np.linalg.eigvals(C).real <= 0))
         if not rho >= self.ratio or reversed_:
             r, rank = self.eom.n_constraints, self.rank(J)
-            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: {reversed_} direction(s) of the "
-                     f"Jacobian's row space turned over, so Phi_q lost rank (by at least {reversed_}) within "
+            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: the Jacobian's rows turned over in "
+                     f"{reversed_} direction(s), so Phi_q lost rank (by at least {reversed_}) within "
                      f"the step; now at" if reversed_ and rho >= self.ratio else
                      f"at t = {t:.9g} s: Phi_q is (nearly) rank-deficient (numerical rank {rank} of {r} rows) at")
             raise SingularConfigurationError(
