@@ -87,7 +87,9 @@ def simulate(
     integrator : str
         'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: rtol/atol) or 'RK4' (fixed ``step``).
     acceleration_solver : str
-        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal'.
+        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank Phi_q: a run
+        stops at a singular pose with a SingularConfigurationError naming the time, pose and rank), or
+        'augmented_lagrangian' (passes singular poses and redundant constraints; no singularity monitor).
     output_step : float
         Spacing of the saved samples [s].
     friction : {None, 'exact', 'regularized', 'sign'}
