@@ -89,5 +89,9 @@ def section(ctx: ReportContext) -> list[str]:
                  fmt_number(r.exudyn_cpu_per_s, 2), fmt_number(r.exudyn_drift, 2), fmt_number(r.t_sim, 3)]
                 for r in scaling.itertuples(index=False)]
         lines += ["Scaling with the number of windows (in-house: augmented Lagrangian + projection, DOP853 rtol 1e-8; "
-                  "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), ""]
+                  "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), "",
+                  "CPU times are process times measured on the shared 2-core machine (`python -m "
+                  "study.studies.n_four_bar_scaling`, each size in a fresh process with an empty code cache). "
+                  "The horizons hold one or two singular positions, whose neighbourhoods take most of the "
+                  "in-house steps, so the CPU per simulated second is not monotonic in N.", ""]
     return lines
