@@ -87,7 +87,9 @@ def simulate(
     integrator : str
         'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: rtol/atol) or 'RK4' (fixed ``step``).
     acceleration_solver : str
-        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal'.
+        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank Phi_q: a run
+        stops at a singular pose with a SingularConfigurationError naming the time, pose and rank), or
+        'augmented_lagrangian' (passes singular poses and redundant constraints; no singularity monitor).
     output_step : float
         Spacing of the saved samples [s].
     friction : {None, 'exact', 'regularized', 'sign'}
@@ -160,8 +162,10 @@ def simulate(
         raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
     check_run_size(eom, q0, qd0, float(t_end), integrator, step, output_step, friction, max_evaluations,
                    max_output_bytes)
-    monitor = SingularityMonitor(eom, q0)
-    monitor.check(0.0, q0)  # a singular start is refused even with check=False: nothing is determined there
+    rank_tolerant = make_acceleration_solver(acceleration_solver).passes_singular
+    monitor = None if rank_tolerant else SingularityMonitor(eom, q0)
+    if monitor is not None:  # a singular start is refused even with check=False: nothing is determined there
+        monitor.check(0.0, q0)
     if check:
         validate_equations(eom, q0, qd0)
     if resistance_reading is None:
@@ -199,7 +203,8 @@ def simulate(
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values
         traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
                          step=step, indicators=indicators, post_step=post_step, progress=progress,
-                         switching=switching, monitor=lambda t, y: monitor.check(t, y[:m]), min_step=min_step,
+                         switching=switching, min_step=min_step,
+                         monitor=None if monitor is None else (lambda t, y: monitor.check(t, y[:m])),
                          describe=guard.describe)
     cpu = time.process_time() - cpu0
     nfev = dyn.nfev

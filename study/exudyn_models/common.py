@@ -162,7 +162,8 @@ def check_arguments(t_end: float, h: float, solver: str, output_step: float | No
     return RunGrid(float(t_end), float(h), n_steps, stride)
 
 
-def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int) -> exu.SimulationSettings:
+def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
+                        ignore_singular: bool = False) -> exu.SimulationSettings:
     """Exudyn settings of a fixed-step run; writes no files.
 
     Parameters
@@ -174,6 +175,10 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int) -> exu.
         numerically w.r.t. position and velocity coordinates (needed for the regularized friction:
         with 0, Newton diverges on tanh(v/1e-3) friction); 0 leaves loads out of the Jacobian
         (the translator says when that is enough: study.exudyn_models.translate.loads_jacobian).
+    ignore_singular : bool
+        Exudyn's documented option for redundant constraints and singular poses
+        (``linearSolver.ignoreSingularJacobian``, Exudyn example fourBarMechanism3D.py): a singular
+        Newton matrix is factorized anyway, the redundant equations left out, instead of stopping.
     """
     s = exu.SimulationSettings()
     ti = s.timeIntegration
@@ -191,6 +196,7 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int) -> exu.
         ti.generalizedAlpha.useIndex2Constraints = True
         ti.generalizedAlpha.useNewmark = True
     ti.computeLoadsJacobian = loads_jacobian
+    s.linearSolver.ignoreSingularJacobian = bool(ignore_singular)
     s.solution.file.write = False            # no solution/coordinatesSolution.txt
     s.solution.sensors.writePeriod = 0.5 * grid.h   # < h: store every step (storage follows writePeriod)
     return s
@@ -478,13 +484,13 @@ def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictio
 # (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
 # ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
 def run_model(build, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
-              eps: float) -> SimulationResult:
+              eps: float, ignore_singular: bool = False) -> SimulationResult:
     """Build the model at the in-house consistent initial state, solve it, return its result."""
     grid = check_arguments(t_end, h, solver, output_step, friction, eps)
     eom = mechanisms.equations(ps)
     state0 = mechanisms.initial_state(ps, eom)
     built = build(ps, state0.q, state0.qd, friction, eps)
-    settings = simulation_settings(grid, solver, built.loads_jacobian)
+    settings = simulation_settings(grid, solver, built.loads_jacobian, ignore_singular)
     stats = {}
     if solver in IMPLICIT_SOLVERS:
         stats.update(seed_reaction_guards(built.model, settings, built.frictions))

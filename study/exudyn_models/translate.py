@@ -519,7 +519,8 @@ def _user_function(law: Law, read, torque: bool):
 
 
 def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
-        friction: str = "regularized", eps: float = common.DEFAULT_EPS) -> SimulationResult:
+        friction: str = "regularized", eps: float = common.DEFAULT_EPS,
+        ignore_singular: bool = False) -> SimulationResult:
     """Simulate a parameter set's mechanism in Exudyn from the in-house consistent initial state.
 
     Parameters
@@ -536,12 +537,14 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
         'none' leaves out the Coulomb friction and resistance of every contact.
     eps : float
         Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (common.DEFAULT_EPS).
+    ignore_singular : bool
+        Exudyn's option for redundant constraints / singular poses (common.simulation_settings).
 
     Returns
     -------
     SimulationResult (see the module docstring for the mapping of every quantity)
     """
-    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps)
+    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps, ignore_singular)
 
 
 def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized",

@@ -94,15 +94,34 @@ def on_branch(ps: ParameterSet, q: np.ndarray) -> bool:
     return float(sp.lambdify([list(d.q)], expr, "math")(list(map(float, q)))) > 0
 
 
+def initial_guess(ps: ParameterSet) -> tuple[np.ndarray, np.ndarray]:
+    """Newton's start (q, qd): the module's ``initial_guess(ps)`` if it has one, else the printed q(0), qd(0).
+
+    Raises ValueError when the guess's length is not the description's number of coordinates.
+    """
+    mod = module(ps.mechanism)
+    if hasattr(mod, "initial_guess"):
+        q, qd = (np.asarray(v, dtype=float) for v in mod.initial_guess(ps))
+    else:
+        q, qd = np.array(ps.initial.printed_q, dtype=float), np.array(ps.initial.printed_qd, dtype=float)
+    n = len(description(ps).coordinate_names)
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"{ps.mechanism} (variant {ps.variant}): the initial guess has {q.size} positions and "
+                         f"{qd.size} rates, the description has {n} coordinates")
+    return q, qd
+
+
 def initial_state(ps: ParameterSet, eom: EquationsOfMotion | None = None) -> ConsistentState:
     """Consistent q(0), qd(0) (relative coordinates) from the parameter file, checked against its branch.
 
     Newton starts from the printed q(0) with the independent coordinates replaced by the
-    specified values (``[initial_conditions.consistent]``).
+    specified values (``[initial_conditions.consistent]``). A description whose size is a parameter
+    (its number of coordinates follows the parameter set) provides ``initial_guess(ps) -> (q, qd)``
+    in its module, which replaces the printed q(0).
     """
     eom = equations(ps) if eom is None else eom
     ic = ps.initial
-    guess = np.array(ic.printed_q, dtype=float)
+    guess = np.array(initial_guess(ps)[0], dtype=float)
     guess[list(ic.independent)] = ic.q_independent
     state = consistent_initial_conditions(eom, guess, ic.independent, ic.qd_independent)
     if not on_branch(ps, state.q):

@@ -36,7 +36,7 @@ __all__ = ["SECTIONS", "build_report"]
 
 # Sections in report order (modules of study.report.sections).
 SECTIONS = ("claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-            "work_precision", "benchmarks", "andrews")
+            "work_precision", "benchmarks", "beyond_papers")
 
 
 def _other_tables_section(tables_dir: Path, shown: set[str]) -> list[str]:

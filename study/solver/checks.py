@@ -98,26 +98,42 @@ class SingularityMonitor:
     def measure(self, q: Array) -> float:
         return singularity_measure(np.asarray(self.eom.phi_q(q), dtype=float), self.scale)
 
+    def rank(self, J: Array) -> int:
+        """Numerical rank of Phi_q: singular values at or above ``singular_ratio`` times the scale."""
+        s = singular_values(J)
+        return int(np.sum(s >= self.ratio * max(float(s.max(initial=0.0)), self.scale)))
+
     def check(self, t: float, q: Array) -> None:
         """Raise SingularConfigurationError if rho(q) < ratio, or if the step since the last call crossed a
-        singular pose: det(J J_last^T) <= 0 (the constraints' row space turned over, which a small step
-        does only by passing through a rank drop; a step can jump over the pose itself)."""
+        singular pose: a direction of the constraints' row space reversed, i.e. J J_last^T has an
+        eigenvalue with real part <= 0 (a small step reverses a row direction only by passing through a
+        rank drop; a step can jump over the pose itself). For J = D J_last (rows rescaled by D) the
+        eigenvalues of D (J_last J_last^T) have the signs of D's entries (Sylvester's law of inertia),
+        so rows that shrink without reversing are not reported. The eigenvalues, not the determinant:
+        an even number of rows vanishing together (parallel windows of a linkage that all flatten at
+        once) turns the determinant over twice and leaves it positive."""
         if self.eom.n_constraints == 0:
             return
         J = np.asarray(self.eom.phi_q(q), dtype=float)
         rho = singularity_measure(J, self.scale)
         self.smallest = min(self.smallest, rho)
-        crossed = self._last is not None and not np.linalg.det(J @ self._last[1].T) > 0
-        if not rho >= self.ratio or crossed:
-            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: the Jacobian's rows turned over, so "
-                     f"Phi_q lost rank within the step; now at" if crossed and rho >= self.ratio else
-                     f"at t = {t:.9g} s: Phi_q is (nearly) rank-deficient at")
+        reversed_ = 0
+        if self._last is not None:
+            C = J @ self._last[1].T
+            reversed_ = int(np.sum(np.linalg.eigvals(C).real <= 0))
+        if not rho >= self.ratio or reversed_:
+            r, rank = self.eom.n_constraints, self.rank(J)
+            where = (f"between t = {self._last[0]:.9g} s and t = {t:.9g} s: the Jacobian's rows turned over in "
+                     f"{reversed_} direction(s), so Phi_q lost rank (by at least {reversed_}) within "
+                     f"the step; now at" if reversed_ and rho >= self.ratio else
+                     f"at t = {t:.9g} s: Phi_q is (nearly) rank-deficient (numerical rank {rank} of {r} rows) at")
             raise SingularConfigurationError(
                 f"{self.eom.name}: singular configuration {where} q = {_fmt(q)}, where "
                 f"sigma_min(Phi_q) / scale = {rho:.3g} (singular below {self.ratio:g}, "
                 f"reference/tolerances.toml: singular_ratio); accelerations and multipliers are not determined "
-                f"there (a dead centre, or links aligned)", t=float(t), quantity="Phi_q", pose=list(map(float, q)),
-                measure=rho)
+                f"there (a dead centre, or links aligned); a method that needs a full-rank Phi_q cannot pass it, "
+                f"acceleration_solver='augmented_lagrangian' can", t=float(t), quantity="Phi_q",
+                pose=list(map(float, q)), measure=rho)
         self._last = (float(t), J)
 
 

@@ -20,6 +20,8 @@ from typing import Callable
 
 import numpy as np
 
+from study.reference_data import tolerance
+
 from study.model.eom import EquationsOfMotion
 
 Array = np.ndarray
@@ -179,10 +181,16 @@ class Projection(Stabilization):
         _positive("projection", tol=self.tol, max_iter=self.max_iter)
 
     def _correction(self, eom, q, J, residual):
+        """The minimum-W-norm dq with J dq = -residual, by least squares truncated at ``singular_ratio``
+        (rank-revealing: at a singular pose the lost rows' directions are left alone, elsewhere it is
+        -W^-1 J^T (J W^-1 J^T)^-1 residual)."""
+        rcond = tolerance("singular_ratio")
         if self.weighting == "mass":
-            MinvJt = np.linalg.solve(eom.mass(q), J.T)
-            return -MinvJt @ np.linalg.solve(J @ MinvJt, residual)
-        return -J.T @ np.linalg.solve(J @ J.T, residual)
+            L = np.linalg.cholesky(eom.mass(q))                 # M = L L^T, dq = L^-T dz
+            JL = np.linalg.solve(L, J.T).T                      # J L^-T
+            dz = np.linalg.lstsq(JL, residual, rcond=rcond)[0]
+            return -np.linalg.solve(L.T, dz)
+        return -np.linalg.lstsq(J, residual, rcond=rcond)[0]
 
     def project(self, eom, q, qd):
         q = q.copy()

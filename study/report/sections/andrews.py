@@ -17,7 +17,6 @@ from study.report.context import ReportContext
 from study.report.render import fmt_number, md_table
 
 STUDY = "andrews"
-PARENT = "## Benchmarks beyond the papers"
 HEADING = "### Andrews' squeezing mechanism (Test Set for IVP Solvers)"
 TABLE = "andrews_published"
 LEVELS = (1e-4, 1e-6, 1e-8)  # error levels [rad] at which the cheapest setting of each series is read
@@ -194,7 +193,3 @@ def subsection(ctx: ReportContext) -> list[str]:
               _cheapest_table(table), "", "Observed orders of the fixed-step series:", "", _orders_table(orders), ""]
     return lines + _reading(table, orders, diff, bound)
 
-
-def section(ctx: ReportContext) -> list[str]:
-    """The parent heading and the Andrews subsection (the lead merges the parent with the N-four-bar's)."""
-    return [PARENT, ""] + subsection(ctx)

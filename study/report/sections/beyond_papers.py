@@ -1,0 +1,105 @@
+"""Report section "Benchmarks beyond the papers": Andrews' squeezer and the IFToMM A02 N-four-bar.
+
+The Andrews subsection is :mod:`study.report.sections.andrews`. The N-four-bar subsection reads the
+tables ``singular_four_bar_runs`` and ``singular_four_bar_x_B0`` (written by
+:func:`study.studies.singular.summarize`) and, if present, ``singular_four_bar_scaling`` (written by
+``python -m study.studies.n_four_bar_scaling``); never a run.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from study.report.context import ReportContext
+from study.report.sections import andrews
+from study.report.render import fmt_int, fmt_number, md_table
+
+HEADING = "## Benchmarks beyond the papers"
+
+
+def _runs_table(runs: pd.DataFrame) -> str:
+    header = ["engine", "method", "setting", "singular positions", "stopped at [s]", "error",
+              "energy drift max|E − E0| [J]", "relative to E0", "max|Φ|", "x_B0(10 s) [m]", "CPU [s]"]
+    rows = [[r.engine, r.method, r.setting, "**passed**" if str(r.passed) == "True" else "**stopped**",
+             fmt_number(r.stopped_at_s, 6), r.error if isinstance(r.error, str) else "",
+             fmt_number(r.energy_drift_J), fmt_number(r.energy_drift_relative), fmt_number(r.max_abs_phi, 2),
+             fmt_number(r.x_B0_end_m, 4), fmt_number(r.cpu_s, 2)] for r in runs.itertuples(index=False)]
+    return md_table(header, rows, [False, False, False, False, True, False, True, True, True, True, True])
+
+
+def _x_b0_figure(ctx: ReportContext, traj: pd.DataFrame) -> str:
+    fig = Figure(figsize=(8.6, 4.4))
+    ax = fig.add_subplot()
+    for name in traj.columns[1:]:
+        ax.plot(traj["t_s"], traj[name], marker=".", label=name)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("x of B0 [m]")
+    ax.set_title("IFToMM A02, N = 2: x coordinate of B0 (sampled every 0.5 s) for every run that passed")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    return ctx.figure(fig, "singular_four_bar_x_B0", "x of B0 against time for every run that passed")
+
+
+def section(ctx: ReportContext) -> list[str]:
+    """Both benchmarks, each in its own subsection."""
+    return ([HEADING, "", "Two problems the multibody community uses to judge formulations, run through the same "
+             "description → in-house + Exudyn path as the papers' mechanisms: one with a published reference "
+             "solution, one that passes configurations where Φ_q loses rank.", ""]
+            + andrews.subsection(ctx) + _n_four_bar(ctx))
+
+
+def _n_four_bar(ctx: ReportContext) -> list[str]:
+    lines = ["### The N-four-bar through singular positions (IFToMM benchmark A02)", "",
+             "N square windows of unit links (1 m, 1 kg, gravity 9.81 N/kg along −y), started with every crank "
+             "vertical and B0 moving along +x at 1 m/s (the specification's figure). Whenever the cranks lie along "
+             "the ground line, rank Φ_q drops from 2N to N and the mobility jumps from 1 to N + 1; the motion "
+             "passes such a position every half turn. Reduced form N = 2 over 10 s.", ""]
+    runs = ctx.table("singular_four_bar_runs")
+    if runs is None:
+        return lines + ["The singular study has not been run (`python -m study run singular`).", ""]
+    passed = runs[runs["passed"].astype(str) == "True"]
+    stopped = runs[runs["passed"].astype(str) != "True"]
+    lines += [_runs_table(runs), ""]
+    inhouse_stop = stopped[stopped["engine"] == "inhouse"]
+    if len(inhouse_stop):
+        lines += [f"Every in-house method that needs a full-rank Φ_q ({', '.join(sorted(set(inhouse_stop['method'])))}) "
+                  f"stops at the first horizontal position, between t = {fmt_number(inhouse_stop['stopped_at_s'].min(), 6)} "
+                  f"and {fmt_number(inhouse_stop['stopped_at_s'].max(), 6)} s, with a SingularConfigurationError naming "
+                  "the time, the pose and the rank; this includes the papers' own R/D partitioning, whose Φ_v "
+                  "becomes singular there for every choice of dependent coordinates.", ""]
+    al = passed[passed["method"].str.startswith("augmented_lagrangian")]
+    if len(al):
+        by_setting = "; ".join(f"{fmt_number(r.energy_drift_J)} J at {r.setting}" for r in al.itertuples(index=False))
+        lines += [f"The augmented Lagrangian passes every singular position and stays on the parallelogram branch "
+                  f"(crank spread ≤ {fmt_number(al['crank_spread_max_rad'].max(), 2)} rad, max|Φ| ≤ "
+                  f"{fmt_number(al['max_abs_phi'].max(), 2)}), but it changes the energy at the crossings: "
+                  f"{by_setting}. The drift does not shrink in proportion to the tolerance: it is made in the few "
+                  "steps around each crossing, where the constraints' weak directions are regularized by the "
+                  "penalty (and the velocity there is then projected back onto the parallelogram branch). Exudyn's "
+                  "index-3 solver, an implicit integrator that solves the constraints at position level every "
+                  "step, does better on this measure. The benchmark's published reference trajectory of B0 is not "
+                  "in this repository, so x_B0 is compared between the runs only (figure).", ""]
+    ex = passed[passed["engine"] == "exudyn"]
+    if len(ex):
+        lines += [f"Exudyn's index-3 generalized-α passes with an energy drift of {fmt_number(ex['energy_drift_J'].min())} J "
+                  "with or without `linearSolver.ignoreSingularJacobian`; its index-2 (trapezoidal) solver stops.", ""]
+    traj = ctx.table("singular_four_bar_x_B0")
+    if traj is not None and len(traj.columns) > 1:
+        lines += [_x_b0_figure(ctx, traj), ""]
+    scaling = ctx.table("singular_four_bar_scaling")
+    if scaling is not None:
+        header = ["N", "derivation [s]", "derivation + code generation [s]", "one evaluation [ms]",
+                  "in-house CPU per simulated s", "in-house energy drift [J]", "Exudyn CPU per simulated s",
+                  "Exudyn energy drift [J]", "horizon [s]"]
+        rows = [[fmt_int(r.N), fmt_number(r.derive_s, 2), fmt_number(r.derive_and_codegen_s, 2),
+                 fmt_number(1e3 * r.eval_s, 2), fmt_number(r.inhouse_cpu_per_s, 2), fmt_number(r.inhouse_drift, 2),
+                 fmt_number(r.exudyn_cpu_per_s, 2), fmt_number(r.exudyn_drift, 2), fmt_number(r.t_sim, 3)]
+                for r in scaling.itertuples(index=False)]
+        lines += ["Scaling with the number of windows (in-house: augmented Lagrangian + projection, DOP853 rtol 1e-8; "
+                  "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), "",
+                  "CPU times are process times measured on the shared 2-core machine (`python -m "
+                  "study.studies.n_four_bar_scaling`, each size in a fresh process with an empty code cache). "
+                  "The horizons hold one or two singular positions, whose neighbourhoods take most of the "
+                  "in-house steps, so the CPU per simulated second is not monotonic in N.", ""]
+    return lines
