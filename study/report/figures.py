@@ -373,8 +373,12 @@ _BENCH_STYLES = {("in-house compiled", "DOP853"): {"color": "tab:blue", "marker"
                  ("in-house compiled", "RK45"): {"color": "tab:green", "marker": "o", "ls": "-"},
                  ("in-house compiled", "RK4"): {"color": "tab:olive", "marker": "^", "ls": "-"},
                  ("in-house reference", "DOP853"): {"color": "0.45", "marker": "o", "ls": ":"},
-                 ("Exudyn", "index3"): {"color": "tab:red", "marker": "s", "ls": "--"},
-                 ("Exudyn", "index2"): {"color": "tab:purple", "marker": "D", "ls": "--"}}
+                 ("Exudyn tuned", "index3"): {"color": "tab:red", "marker": "s", "ls": "--"},
+                 ("Exudyn tuned", "index2"): {"color": "tab:purple", "marker": "D", "ls": "--"},
+                 ("Exudyn (Python user functions)", "index3"): {"color": "tab:red", "marker": "s", "ls": ":",
+                                                                "mfc": "none"},
+                 ("Exudyn (Python user functions)", "index2"): {"color": "tab:purple", "marker": "D", "ls": ":",
+                                                                "mfc": "none"}}
 
 
 def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = (1e-4, 1e-6, 1e-8)) -> Figure:
@@ -395,7 +399,7 @@ def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = 
         series = []
         for (engine, method), runs in g.groupby(["engine", "method"], sort=False):
             runs = runs[runs["error"].notna() & runs["cpu_s"].notna()].sort_values("setting", ascending=False)
-            what = "h" if engine == "Exudyn" or method == "RK4" else "rtol"
+            what = "h" if engine.startswith("Exudyn") or method == "RK4" else "rtol"
             label = f"{engine} {method} ({what} {runs['setting'].max():.3g} … {runs['setting'].min():.3g})"
             series.append((label, runs["cpu_s"], runs["error"],
                            {"ms": 4, "lw": 1.2, **_BENCH_STYLES.get((engine, method), {"color": "tab:gray"})}))
