@@ -562,6 +562,52 @@ def quick_return_20s(quick: bool) -> tuple[pd.DataFrame, list[dict]]:
     return pd.DataFrame(rows), ref_rows
 
 
+# --- (g) where the loop's time goes ------------------------------------------------------------------------
+def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, repeats: int) -> pd.DataFrame:
+    """Split the CPU of each run behind a loop-overhead row into its parts (numba code has no profiler
+    hooks, so the parts are measured, not sampled).
+
+    * ``startup_s``: the same run stopped after one output step (setup of the loop state, initial
+      mode, the first Python -> compiled call, first step-size selection);
+    * ``evaluations_s``: evaluations × the cost of one inside the compiled loop (the model's work);
+    * ``events_s``: located switches × one Python -> compiled call (after a switch the loop returns
+      to Python, which flips the mode and calls the compiled loop again);
+    * ``loop_s``: the rest, the integrator's own work per step (stage combinations, error norm, step
+      control, dense output at the samples, switch detection), also given per step.
+    """
+    loop = accel[accel.path == "compiled, in compiled loop"].set_index("mechanism")
+    call = accel[accel.path == "compiled, one call from Python"].set_index("mechanism")
+    runs = []
+    for variant, g in qr20.groupby("variant", sort=False):
+        ok = g[g.error + g.reference_uncertainty <= T2_LEVEL]
+        b = ok.loc[ok.cpu_s.idxmin()] if not ok.empty else g.loc[g.error.idxmin()]
+        runs.append(("quick_return", variant, float(b.t_end), {}, float(b.rtol), float(b.eval_us)))
+    for mech, g in wp[(wp.engine == "in-house compiled") & (wp.method == "DOP853")].groupby("mechanism", sort=False):
+        ok = g[g.error <= RATIO_LEVEL]
+        if mech in CASES and mech != "quick_return" and not ok.empty and mech in loop.index:
+            b = ok.loc[ok.cpu_s.idxmin()]
+            runs.append((mech, b.variant, float(b.t_end), CASES[mech][2], float(b.setting),
+                         float(loop.loc[mech, "us_per_evaluation"])))
+    rows = []
+    for mech, variant, t_end, extra, rtol, eval_us in runs:
+        cpu, r = median_cpu(_inhouse(mech, variant, t_end, extra, "compiled", "DOP853", rtol), repeats)
+        start, _ = median_cpu(_inhouse(mech, variant, OUTPUT_STEP, extra, "compiled", "DOP853", rtol), repeats)
+        call_us = float(call.loc[mech, "us_per_evaluation"]) if mech in call.index else np.nan
+        nfev = int(r.stats["nfev"])
+        ev = int(r.stats.get("events", 0))
+        evals = nfev * eval_us * 1e-6
+        events = ev * call_us * 1e-6 if ev else 0.0
+        rest = cpu - start - evals - events
+        rows.append({"mechanism": mech, "variant": variant, "t_end": t_end, "rtol": rtol, "cpu_s": cpu,
+                     "repeats": repeats, "steps": int(r.stats["steps"]), "nfev": nfev, "events": ev,
+                     "startup_s": start, "evaluations_s": evals, "events_s": events, "loop_s": rest,
+                     "loop_us_per_step": rest / max(int(r.stats["steps"]), 1) * 1e6,
+                     "overhead": cpu / evals})
+        log(f"(g) {mech} {variant} rtol {rtol:g}: cpu {cpu:.4f} s = start-up {start:.4f} + evaluations {evals:.4f} "
+            f"+ switches {events:.4f} + loop {rest:.4f} ({rows[-1]['loop_us_per_step']:.2f} us/step)")
+    return pd.DataFrame(rows)
+
+
 # --- targets -------------------------------------------------------------------------------------------------
 def _fit_exponent(t: np.ndarray, cpu: np.ndarray) -> float:
     """Least-squares slope p of log cpu = p log T + c."""
@@ -818,7 +864,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     parser.add_argument("--skip-compile", action="store_true", help="do not measure the one-off compile time")
     parser.add_argument("--only", nargs="+", metavar="SECTION",
-                        help="run only these sections (accel, qr20, sweep, scaling, compile); the others' tables "
+                        help="run only these sections (accel, qr20, sweep, scaling, profile, compile); the others' tables "
                              "are read from the output folder")
     return parser
 
@@ -829,7 +875,7 @@ def main(argv=None) -> int:
     return run(add_arguments(parser).parse_args(argv))
 
 
-SECTIONS = ("accel", "qr20", "sweep", "scaling", "compile")
+SECTIONS = ("accel", "qr20", "sweep", "scaling", "profile", "compile")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -900,6 +946,8 @@ def run(args: argparse.Namespace) -> int:
         mem_df.to_csv(out / "peak_memory.csv", index=False)
     else:
         time_df, mem_df = saved("scaling_simulated_time.csv"), saved("peak_memory.csv")
+    if "profile" in only:
+        overhead_profile(qr20, wp, accel, REPEATS).to_csv(out / "overhead_profile.csv", index=False)
     targets = evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp)
     targets.to_csv(out / "targets.csv", index=False)
     for _, t in targets.iterrows():

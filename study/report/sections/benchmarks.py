@@ -209,6 +209,20 @@ def section(ctx: ReportContext) -> list[str]:
     if per_level is not None:
         lines += ["CPU time of the cheapest setting of every method reaching each accuracy (setting: rtol, or the "
                   "step h [s]):", "", _cpu_to_accuracy_table(per_level), ""]
+    profile = _read(ctx, "overhead_profile.csv")
+    if profile is not None and len(profile):
+        lines += ["### Where the compiled loop's time goes", "",
+                  "Each run behind a loop-overhead row, its CPU split into measured parts (numba code has no "
+                  "profiler hooks): start-up (the same run stopped after one output step), the model's evaluations "
+                  "(count × the cost of one inside the compiled loop), the located switches (count × one Python → "
+                  "compiled call: after a switch the loop returns to Python) and the rest, the integrator's own work "
+                  "per step.", "",
+                  _frame_table(profile, {"mechanism": "mechanism", "variant": "variant", "t_end": "t_end [s]",
+                                         "rtol": "rtol", "cpu_s": "CPU [s]", "steps": "steps", "nfev": "evaluations",
+                                         "events": "switches", "startup_s": "start-up [s]",
+                                         "evaluations_s": "evaluations [s]", "events_s": "switches [s]",
+                                         "loop_s": "rest [s]", "loop_us_per_step": "rest per step [µs]",
+                                         "overhead": "overhead"}, ints={"steps", "nfev", "events"}), ""]
     qr20 = _read(ctx, "quick_return_20s.csv")
     if qr20 is not None:
         lines += ["### Quick-return over 20 s to 1e-8", "",
