@@ -21,8 +21,9 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     # optional: drop the combinations whose options contain all entries of one of these tables
     exclude = [ { integrator = "LSODA", method = "projection" } ]
     # optional (engine 'inhouse'): the backend of every case of the group ('reference' or 'compiled',
-    # study.simulate's backend), and for a compiled group every n-th case (the first, the (n+1)-th, ...)
-    # also run on the reference path: the pairs are checked to agree (CaseList.samples, tables/
+    # study.simulate's backend; a sweep entry may state its own), and for a compiled group every n-th
+    # compiled case (the first, the (n+1)-th, ...) also run on the reference path: the pairs are checked
+    # to agree (CaseList.samples, tables/
     # backend_agreement.csv; tests/test_backend_samples.py) and are not part of the study's cases
     backend = "compiled"
     reference_sample = 10
@@ -281,11 +282,8 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
             continue
         if case_fields["mechanism"] is None or case_fields["t_end"] is None:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
-        if backend is not None:
-            if options.get("backend", backend) != backend:
-                raise CaseListError(f"{where}: option backend = {options['backend']!r} contradicts the group's "
-                                    f"backend = {backend!r}")
-            options["backend"] = backend
+        if backend is not None:   # a sweep entry's own backend option (e.g. an integrator only the
+            options.setdefault("backend", backend)   # reference path has) is stated there and wins
         t_end = case_fields["t_end"]
         if not isinstance(t_end, (int, float)) or not t_end > 0:
             raise CaseListError(f"{where}: t_end = {t_end!r} must be a number > 0 [s]")
@@ -305,8 +303,9 @@ def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case
         raise CaseListError(f"{where}: reference_sample = {n!r} must be a whole number >= 1 (every n-th case)")
     if g.get("backend") != "compiled":
         raise CaseListError(f"{where}: reference_sample needs backend = 'compiled' (it samples a compiled group)")
+    compiled = [c for c in cases if c.kwargs.get("backend") == "compiled"]
     return [(c, Case(c.study, c.group + SAMPLE_SUFFIX, c.engine, c.mechanism, c.variant, c.t_end,
-                     tuple(sorted({**c.kwargs, "backend": "reference"}.items())), c.labels)) for c in cases[::n]]
+                     tuple(sorted({**c.kwargs, "backend": "reference"}.items())), c.labels)) for c in compiled[::n]]
 
 
 def load_case_list(path: Path) -> CaseList:
