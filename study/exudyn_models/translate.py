@@ -24,6 +24,14 @@ Model
   node angular velocity. A mode symbol is +1 if its switching function (evaluated live on the same
   inputs) is >= 0, else -1: the law is evaluated without event location, as Exudyn cannot locate a
   switch within a step.
+* ``configuration='tuned'`` (what Exudyn's documentation recommends for speed; 'python' is the
+  above): a law whose inputs are all those of the element carrying it is recorded once as an Exudyn
+  symbolic user function (``exudyn.symbolic``, evaluated in C++, no Python per call): a point force
+  reading only its point's x, y, vx, vy as ObjectConnectorCartesianSpringDamper from the ground
+  origin, a torque reading only its body's angle and rate as ObjectConnectorCoordinateSpringDamper on
+  the rotation coordinate (see common.Model.point_law / angle_law); other laws and the friction (it
+  reads a joint reaction, which only Python can) stay Python user functions; Newton reuses one
+  Jacobian per step. tests/test_exudyn_tuned.py checks both configurations give the same answers.
 * Potentials (springs): user-function torques / forces = minus the gradient of the energy with
   respect to the angle and point-position inputs; their energy is part of the result's potential.
 * Friction: a prismatic joint with :class:`~study.model.joints.Friction` data whose kinetic
