@@ -615,7 +615,8 @@ def _fit_exponent(t: np.ndarray, cpu: np.ndarray) -> float:
 
 
 def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFrame, scaling_time: pd.DataFrame,
-                     memory: pd.DataFrame, thresholds: dict = THRESHOLDS, wp: pd.DataFrame | None = None) -> pd.DataFrame:
+                     memory: pd.DataFrame, thresholds: dict = THRESHOLDS, wp: pd.DataFrame | None = None,
+                     study_cpu: pd.DataFrame | None = None) -> pd.DataFrame:
     """Issue 7's targets from the benchmark's tables (a pure function of the saved frames).
 
     Parameters
@@ -634,6 +635,8 @@ def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFram
         key -> (threshold, unit, text), default :data:`THRESHOLDS`.
     wp : DataFrame, optional
         ``work_precision.csv`` (loop overhead of the other mechanisms, compiled / reference CPU).
+    study_cpu : DataFrame, optional
+        ``study_backend_cpu.csv``: the studies' sampled case pairs (study.pipeline.backend_cpu).
 
     Returns
     -------
@@ -729,7 +732,7 @@ def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFram
             add("overhead", float(b.cpu_s / (b.nfev * us * 1e-6)),
                 f"{mech} {b.variant}, {b.t_end:g} s, compiled DOP853 rtol {b.setting:g} (cheapest to {RATIO_LEVEL:g}): "
                 f"{b.cpu_s:.3g} s / ({int(b.nfev)} evaluations × {us:.3g} µs)", int(b.repeats), "", case=mech)
-        # 6: compiled / reference at the same method and setting
+        # 6: compiled / reference at the same method and setting (bench runs)
         pair = wp[wp.engine.isin(["in-house compiled", "in-house reference"])].pivot_table(
             index=["mechanism", "method", "setting"], columns="engine", values="cpu_s")
         if {"in-house compiled", "in-house reference"} <= set(pair.columns):
@@ -742,6 +745,14 @@ def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFram
                     f"{', '.join(sorted({m for m, _, _ in rat.index}))}); largest at {worst[0]} {worst[1]} rtol {worst[2]:g}",
                     1, f"ratios {rat.min():.3g} … {rat.max():.3g} (median {rat.median():.3g}); the study's own cases "
                     "are not timed here")
+    if study_cpu is not None and len(study_cpu):
+        r = study_cpu.compiled_over_reference
+        worst = study_cpu.loc[r.idxmax()]
+        add("compiled_ref", float(r.max()),
+            f"every sampled study case run on both paths (saved runs of the pipeline, {len(study_cpu)} pairs in "
+            f"{', '.join(sorted(study_cpu.study.unique()))}); largest: {worst.case}", 1,
+            f"ratios {r.min():.3g} … {r.max():.3g} (median {r.median():.3g}); CPU of each saved run, timed once when "
+            "the pipeline computed it", case="study cases")
     for mech in ABSENT:
         rows.append({"target": f"5, 3: the quick-return's table for {mech}", "threshold": np.nan, "measured": np.nan,
                      "unit": "-", "met": "not measured", "how_measured": "not measured: mechanism not in this branch",
@@ -864,7 +875,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     parser.add_argument("--skip-compile", action="store_true", help="do not measure the one-off compile time")
     parser.add_argument("--only", nargs="+", metavar="SECTION",
-                        help="run only these sections (accel, qr20, sweep, scaling, profile, compile); the others' tables "
+                        help="run only these sections (accel, qr20, sweep, scaling, profile, studies, compile); the others' tables "
                              "are read from the output folder")
     return parser
 
@@ -875,7 +886,7 @@ def main(argv=None) -> int:
     return run(add_arguments(parser).parse_args(argv))
 
 
-SECTIONS = ("accel", "qr20", "sweep", "scaling", "profile", "compile")
+SECTIONS = ("accel", "qr20", "sweep", "scaling", "profile", "studies", "compile")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -946,9 +957,19 @@ def run(args: argparse.Namespace) -> int:
         mem_df.to_csv(out / "peak_memory.csv", index=False)
     else:
         time_df, mem_df = saved("scaling_simulated_time.csv"), saved("peak_memory.csv")
+    study_cpu = None
+    if "studies" in only:   # reads the pipeline's saved runs (no run here); absent cache -> no row
+        from study.model.compile import cache_dir
+        from study.pipeline import Store, backend_cpu, load_case_lists
+
+        study_cpu = backend_cpu(load_case_lists(), Store(cache_dir() / "runs"))
+        study_cpu.to_csv(out / "study_backend_cpu.csv", index=False)
+        log(f"(h) studies: {len(study_cpu)} saved compiled/reference pairs")
+    elif (out / "study_backend_cpu.csv").exists():
+        study_cpu = saved("study_backend_cpu.csv")
     if "profile" in only:
         overhead_profile(qr20, wp, accel, REPEATS).to_csv(out / "overhead_profile.csv", index=False)
-    targets = evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp)
+    targets = evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp, study_cpu=study_cpu)
     targets.to_csv(out / "targets.csv", index=False)
     for _, t in targets.iterrows():
         verdict = {True: "met", False: "MISSED"}.get(t.met, t.met)

@@ -709,6 +709,18 @@ def backend_agreement(case_lists: Iterable[CaseList], store: Store) -> pd.DataFr
     return pd.DataFrame(rows, columns=["study", "case", "t_end", "max_abs_dq", "bound", "rule", "agree"])
 
 
+def backend_cpu(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
+    """CPU of every sampled compiled case and of its reference-path twin (machine-dependent: timing/)."""
+    rows = []
+    for cl in case_lists:
+        for case, twin in cl.samples:
+            if store.has(case) and store.has(twin):
+                fast, ref = (float(store.load(c).stats["cpu_seconds"]) for c in (case, twin))
+                rows.append({"study": cl.study, "case": case.name, "compiled_cpu_s": fast, "reference_cpu_s": ref,
+                             "compiled_over_reference": fast / ref if ref > 0 else np.nan})
+    return pd.DataFrame(rows, columns=["study", "case", "compiled_cpu_s", "reference_cpu_s", "compiled_over_reference"])
+
+
 def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
                  scheduler: str | None = None, folder: Path = CASES_DIR, stream=None,
                  record_root: Path | None = None) -> dict[str, Any]:
@@ -759,7 +771,8 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
     if any(cl.samples for cl in case_lists):
-        write_tables({"backend_agreement": backend_agreement(case_lists, store)}, reports_dir)
+        write_tables({"backend_agreement": backend_agreement(case_lists, store),
+                      "backend_cpu_timing": backend_cpu(case_lists, store)}, reports_dir)
     save_record(record, record_root)
     return record
 

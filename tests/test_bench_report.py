@@ -175,3 +175,12 @@ def test_section_renders_saved_numbers(tmp_path):
 def test_section_without_benchmark(tmp_path):
     lines = benchmarks.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={}))
     assert lines[0].startswith("## Performance") and "make bench" in "\n".join(lines)
+
+
+def test_study_cases_compiled_over_reference_row():
+    study_cpu = pd.DataFrame({"study": ["s", "s"], "case": ["s/a", "s/b"], "compiled_cpu_s": [0.03, 0.05],
+                              "reference_cpu_s": [1.0, 1.0], "compiled_over_reference": [0.03, 0.05]})
+    ratio = ratios(cheapest(_work_precision()))
+    t = evaluate_targets(_accel(), ratio, _qr20(), _scaling(), _memory(), study_cpu=study_cpu)
+    row = t[t.target.str.contains("study cases")].iloc[0]
+    assert row.measured == pytest.approx(0.05) and row.met is False and "s/b" in row.how_measured
