@@ -978,7 +978,12 @@ def run(args: argparse.Namespace) -> int:
         compile_time().to_csv(out / "compile_time.csv", index=False)
     info["benchmark_wall_s"] = time.perf_counter() - t0
     info["load_average_at_end"] = os.getloadavg()[0]
-    (out / "machine.json").write_text(json.dumps(info, indent=1, sort_keys=True))
+    path = out / "machine.json"
+    if only != set(SECTIONS) and path.exists():   # a partial run keeps the full run's record, adds its own
+        full = json.loads(path.read_text())
+        full.setdefault("partial_runs", []).append(info)
+        info = full
+    path.write_text(json.dumps(info, indent=1, sort_keys=True))
     log(f"done in {info['benchmark_wall_s']:.0f} s; results in {out}")
     return 0
 
