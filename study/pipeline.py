@@ -20,6 +20,13 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     sweep = { omega = [1.0, 10.0], d = [0.5, 1.0] }
     # optional: drop the combinations whose options contain all entries of one of these tables
     exclude = [ { integrator = "LSODA", method = "projection" } ]
+    # optional (engine 'inhouse'): the backend of every case of the group ('reference' or 'compiled',
+    # study.simulate's backend; a sweep entry may state its own), and for a compiled group every n-th
+    # compiled case (the first, the (n+1)-th, ...) also run on the reference path: the pairs are checked
+    # to agree (CaseList.samples, tables/
+    # backend_agreement.csv; tests/test_backend_samples.py) and are not part of the study's cases
+    backend = "compiled"
+    reference_sample = 10
 
 Options are the keyword arguments of :func:`study.simulate.simulate` (engine 'inhouse'; plus
 ``initial = "printed"`` to start from the paper's printed state instead of the consistent one) or of
@@ -72,7 +79,10 @@ CODE_PATHS = {
 }
 NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
-_GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude"}
+_GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude", "backend",
+               "reference_sample"}
+BACKENDS = ("reference", "compiled")
+SAMPLE_SUFFIX = ":reference_sample"   # group name of the reference-path twins of a compiled group
 _FIELD_SWEEPS = ("mechanism", "variant", "t_end")
 
 
@@ -191,6 +201,12 @@ class CaseList:
     cases: tuple[Case, ...]
     path: Path
     report: Mapping[str, Any] = field(default_factory=dict)   # the list's [report] table: its section's choices
+    samples: tuple[tuple[Case, Case], ...] = ()   # (compiled case, its reference-path twin), see reference_sample
+
+    @property
+    def all_cases(self) -> tuple[Case, ...]:
+        """The study's cases and the reference-path twins of its samples (everything the pipeline runs)."""
+        return self.cases + tuple(twin for _, twin in self.samples)
 
 
 def _label(value: Any) -> str:
@@ -248,6 +264,9 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
         if not isinstance(values, list) or not values:
             raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
     _check_exclude(g, where)
+    backend = g.get("backend")
+    if backend is not None and (engine != "inhouse" or backend not in BACKENDS):
+        raise CaseListError(f"{where}: backend = {backend!r} must be one of {BACKENDS}, for engine 'inhouse' only")
     cases = []
     for combo in itertools.product(*sweep.values()) if sweep else [()]:
         case_fields, options, labels = dict(fields), {k: _resolve(v, where) for k, v in g.get("options", {}).items()}, []
@@ -263,6 +282,8 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
             continue
         if case_fields["mechanism"] is None or case_fields["t_end"] is None:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
+        if backend is not None:   # a sweep entry's own backend option (e.g. an integrator only the
+            options.setdefault("backend", backend)   # reference path has) is stated there and wins
         t_end = case_fields["t_end"]
         if not isinstance(t_end, (int, float)) or not t_end > 0:
             raise CaseListError(f"{where}: t_end = {t_end!r} must be a number > 0 [s]")
@@ -271,6 +292,20 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
         cases.append(Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"],
                           float(t_end), tuple(sorted(options.items())), tuple(labels)))
     return cases
+
+
+def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case]]:
+    """Every n-th case of a compiled group (``reference_sample = n``) and its reference-path twin."""
+    n = g.get("reference_sample")
+    if n is None:
+        return []
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise CaseListError(f"{where}: reference_sample = {n!r} must be a whole number >= 1 (every n-th case)")
+    if g.get("backend") != "compiled":
+        raise CaseListError(f"{where}: reference_sample needs backend = 'compiled' (it samples a compiled group)")
+    compiled = [c for c in cases if c.kwargs.get("backend") == "compiled"]
+    return [(c, Case(c.study, c.group + SAMPLE_SUFFIX, c.engine, c.mechanism, c.variant, c.t_end,
+                     tuple(sorted({**c.kwargs, "backend": "reference"}.items())), c.labels)) for c in compiled[::n]]
 
 
 def load_case_list(path: Path) -> CaseList:
@@ -288,13 +323,16 @@ def load_case_list(path: Path) -> CaseList:
     names = [g.get("name") for g in groups]
     if None in names or len(set(names)) != len(names):
         raise CaseListError(f"{path}: every group needs a unique 'name'; got {names}")
-    cases = []
+    cases, samples = [], []
     for g in groups:
-        cases += _expand_group(study, g, f"{path.name} group {g['name']!r}")
+        where = f"{path.name} group {g['name']!r}"
+        group_cases = _expand_group(study, g, where)
+        cases += group_cases
+        samples += _samples(g, group_cases, where)
     report = data.get("report", {})
     if not isinstance(report, dict):
         raise CaseListError(f"{path}: [report] must be a table (the report section's choices), got {report!r}")
-    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report)
+    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report, tuple(samples))
 
 
 def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:
@@ -629,11 +667,58 @@ def failures_table(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame
     """Every case whose last attempt failed, with its error message."""
     rows = []
     for cl in case_lists:
-        for case in cl.cases:
+        for case in cl.all_cases:
             failure = None if store.has(case) else store.failure(case)
             if failure is not None:
                 rows.append({"study": cl.study, "case": case.name, "key": case.key(), "error": failure["error"]})
     return pd.DataFrame(rows, columns=["study", "case", "key", "error"])
+
+
+def sample_agreement(compiled: SimulationResult, reference: SimulationResult, options: Mapping[str, Any]) -> dict:
+    """How far a compiled run is from its reference-path twin, and the bound it must stay within.
+
+    Adaptive methods: both paths take the same method at the same tolerances, so each is within the
+    global error of the tolerance, adaptive_global_error_factor * rtol * max|q| (reference/tolerances.toml,
+    with its reason), of the exact solution. Fixed-step RK4: the same steps, only round-off differs,
+    fast_fixed_step_agreement * max|q| (its reason assumes ~300 steps: the check runs that long).
+    """
+    scale = float(np.max(np.abs(reference.q)))
+    if "rtol" in options:
+        bound = tolerance("adaptive_global_error_factor") * float(options["rtol"]) * scale
+        rule = "adaptive_global_error_factor * rtol * max|q|"
+    else:
+        bound = tolerance("fast_fixed_step_agreement") * scale
+        rule = "fast_fixed_step_agreement * max|q|"
+    if len(compiled.t) != len(reference.t):
+        return {"max_abs_dq": np.nan, "bound": bound, "rule": rule, "agree": False}
+    dq = float(np.max(np.abs(compiled.q - reference.q)))
+    return {"max_abs_dq": dq, "bound": bound, "rule": rule, "agree": bool(dq <= bound)}
+
+
+def backend_agreement(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
+    """Every sampled compiled case against its reference-path twin, full horizon (see sample_agreement)."""
+    rows = []
+    for cl in case_lists:
+        for case, twin in cl.samples:
+            row = {"study": cl.study, "case": case.name, "t_end": case.t_end}
+            if store.has(case) and store.has(twin):
+                row.update(sample_agreement(store.load(case), store.load(twin), case.kwargs))
+            else:
+                row.update(max_abs_dq=np.nan, bound=np.nan, rule="a run failed", agree=False)
+            rows.append(row)
+    return pd.DataFrame(rows, columns=["study", "case", "t_end", "max_abs_dq", "bound", "rule", "agree"])
+
+
+def backend_cpu(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
+    """CPU of every sampled compiled case and of its reference-path twin (machine-dependent: timing/)."""
+    rows = []
+    for cl in case_lists:
+        for case, twin in cl.samples:
+            if store.has(case) and store.has(twin):
+                fast, ref = (float(store.load(c).stats["cpu_seconds"]) for c in (case, twin))
+                rows.append({"study": cl.study, "case": case.name, "compiled_cpu_s": fast, "reference_cpu_s": ref,
+                             "compiled_over_reference": fast / ref if ref > 0 else np.nan})
+    return pd.DataFrame(rows, columns=["study", "case", "compiled_cpu_s", "reference_cpu_s", "compiled_over_reference"])
 
 
 def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
@@ -659,11 +744,12 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     with make_executor(workers, scheduler) as executor:
         for cl in case_lists:
             ts = time.perf_counter()
-            run = run_cases(cl.cases, store, executor, title=cl.study, stream=stream)
-            record["studies"][cl.study] = {"cases": len(cl.cases), "cached": run.cached, "computed": run.computed,
+            run = run_cases(cl.all_cases, store, executor, title=cl.study, stream=stream)
+            record["studies"][cl.study] = {"cases": len(cl.cases), "reference_samples": len(cl.samples),
+                                           "cached": run.cached, "computed": run.computed,
                                            "failed": run.failed, "rejected": run.rejected}
             record["stages"][f"run:{cl.study}"] = time.perf_counter() - ts
-            record["case_keys"][cl.study] = {c.name: c.key() for c in cl.cases}
+            record["case_keys"][cl.study] = {c.name: c.key() for c in cl.all_cases}
     record["stages"]["run"] = time.perf_counter() - t0
     for cl in case_lists:
         ts = time.perf_counter()
@@ -684,6 +770,9 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
         atomic_write(written, json.dumps({str(p.resolve()): _table_entry(p) for p in paths}, indent=1))
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
+    if any(cl.samples for cl in case_lists):
+        write_tables({"backend_agreement": backend_agreement(case_lists, store),
+                      "backend_cpu_timing": backend_cpu(case_lists, store)}, reports_dir)
     save_record(record, record_root)
     return record
 

@@ -33,7 +33,8 @@ def _work_precision():
         for engine, method, runs in (
                 ("in-house compiled", "DOP853", [(1e-6, 3e-4, 0.006), (1e-9, 4e-7, 0.0123), (1e-12, 5e-9, 0.027)]),
                 ("in-house reference", "DOP853", [(1e-8, 5e-5, 0.61)]),
-                ("Exudyn", "index3", [(1e-3, 2e-3, 0.45), (1e-4, 5e-5, 4.5), (2e-5, 8.1e-7, 22.25)])):
+                ("Exudyn tuned", "index3", [(1e-3, 2e-3, 0.45), (1e-4, 5e-5, 4.5), (2e-5, 8.1e-7, 22.25)]),
+                ("Exudyn (Python user functions)", "index3", [(1e-3, 2e-3, 0.9), (2e-5, 8.1e-7, 61.0)])):
             for setting, err, cpu in runs:
                 rows.append({"mechanism": mech, "variant": variant, "t_end": t_end, "engine": engine, "method": method,
                              "setting": setting, "error": err, "cpu_s": cpu, "repeats": 5 if cpu < 5 else 1,
@@ -73,7 +74,10 @@ def _targets(**kw):
 def test_targets_met_from_synthetic_tables():
     t = _targets()
     assert list(t.columns) == ["target", "threshold", "measured", "unit", "met", "how_measured", "repeats", "note"]
-    assert len(t) == 7 and t["met"].all()
+    verdicts = t.met.astype(str).tolist()
+    assert len(t) == 10 and verdicts.count("True") == 7
+    assert verdicts.count("reported") == 2 and verdicts.count("not measured") == 1  # ratio 3', Andrews
+    assert t[t.met.astype(str) == "not measured"].how_measured.iloc[0] == "not measured: mechanism not in this branch"
     accel = t[t.target.str.startswith("1:")].iloc[0]
     assert accel.measured == pytest.approx(0.83) and accel.threshold == THRESHOLDS["accel"][0]
     qr = t[t.target.str.startswith("2:")]
@@ -81,13 +85,16 @@ def test_targets_met_from_synthetic_tables():
     ratio = t[t.target.str.startswith("3:")]
     assert list(ratio.measured) == pytest.approx([0.0123 / 22.25] * 2)  # DOP853 1e-9 / Exudyn h = 2e-5
     assert "(quick_return)" in ratio.target.iloc[0] and "(slider_crank)" in ratio.target.iloc[1]
+    assert "Exudyn tuned" in ratio.target.iloc[0] and "Exudyn tuned" in ratio.how_measured.iloc[0]
+    python = t[t.target.str.startswith("3':")]   # reference path 1e-8 setting (5e-5 rad) misses 1e-6: NaN
+    assert python.measured.isna().all() and (python.met == "reported").all()
 
 
 def test_targets_missed_from_synthetic_tables():
     t = _targets(accel=_accel(us_loop=6.0), qr20=_qr20(best_error=2e-8), scaling=_scaling(cpu_100=0.9),
                  memory=_memory(bytes_small=60000))
     met = dict(zip(t.target.str.split(":").str[0], t.met))
-    assert not met["1"] and not met["4a"] and not met["4b"]
+    assert met["1"] is False and met["4a"] is False and met["4b"] is False
     qr = t[t.target.str.startswith("2:")]
     assert not qr.met.any() and qr.measured.isna().all()  # not reached: no CPU, the best error in the note
     assert "no setting reaches 1e-08" in qr.note.iloc[0] and "1e-08" in qr.note.iloc[0]
@@ -100,6 +107,8 @@ def test_targets_missed_from_synthetic_tables():
 
 def test_exudyn_not_reaching_a_level_is_recorded():
     ratio = ratios(cheapest(_work_precision()))
+    assert set(ratio.comparison) == {"compiled / Exudyn tuned", "reference / Exudyn (Python user functions)"}
+    ratio = ratio[ratio.comparison == "compiled / Exudyn tuned"]
     at8 = ratio[np.isclose(ratio.level, 1e-8)]
     assert at8.ratio_inhouse_over_exudyn.isna().all()
     assert at8.exudyn_finest_h_tried.tolist() == pytest.approx([2e-5, 2e-5])
@@ -150,7 +159,7 @@ def test_section_renders_saved_numbers(tmp_path):
         assert fmt_number(value) in text
     assert "Linux-test" in text and "432" in text and "exudyn 1.13.6" in text
     assert "41.7" in text and "2.5e-10" in text
-    assert "All 7 target rows met." in text
+    assert "All 7 target rows met." in text and "3 row(s) carry no verdict" in text
     assert (tmp_path / "figures" / "benchmark_work_precision.png").exists()
     read = {p.name for p in ctx.inputs}
     assert {"targets.csv", "work_precision.csv", "ratio_inhouse_exudyn.csv", "machine.json",
@@ -160,8 +169,18 @@ def test_section_renders_saved_numbers(tmp_path):
     missed.to_csv(tmp_path / "benchmarks" / "targets.csv", index=False)
     text = "\n".join(benchmarks.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "| 7.5 | µs | **missed** |" in text and "1 of 7 target rows missed" in text
+    assert "| reported |" in text and "| not measured |" in text
 
 
 def test_section_without_benchmark(tmp_path):
     lines = benchmarks.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={}))
     assert lines[0].startswith("## Performance") and "make bench" in "\n".join(lines)
+
+
+def test_study_cases_compiled_over_reference_row():
+    study_cpu = pd.DataFrame({"study": ["s", "s"], "case": ["s/a", "s/b"], "compiled_cpu_s": [0.03, 0.05],
+                              "reference_cpu_s": [1.0, 1.0], "compiled_over_reference": [0.03, 0.05]})
+    ratio = ratios(cheapest(_work_precision()))
+    t = evaluate_targets(_accel(), ratio, _qr20(), _scaling(), _memory(), study_cpu=study_cpu)
+    row = t[t.target.str.contains("study cases")].iloc[0]
+    assert row.measured == pytest.approx(0.05) and row.met is False and "s/b" in row.how_measured

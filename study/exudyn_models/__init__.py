@@ -1,7 +1,7 @@
 """Exudyn models of the study's mechanisms, generated from their joint-level descriptions (the only
 package that imports ``exudyn``).
 
-``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=...) ->
+``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=..., configuration='python') ->
 study.results.SimulationResult`` builds the Exudyn model of ``ps``'s description
 (:mod:`study.exudyn_models.translate`); there is no per-mechanism code. The in-house equations of
 motion are used for nothing but the consistent initial state and for evaluating the in-house Phi on
@@ -18,6 +18,7 @@ translate
 """
 
 from study.exudyn_models.common import (
+    CONFIGURATIONS,
     DEFAULT_EPS,
     EXPLICIT_SOLVERS,
     FRICTION_MODES,
@@ -29,6 +30,7 @@ from study.exudyn_models.common import (
 from study.exudyn_models.translate import initial_accelerations, run
 
 __all__ = [
+    "CONFIGURATIONS",
     "DEFAULT_EPS",
     "EXPLICIT_SOLVERS",
     "FRICTION_MODES",

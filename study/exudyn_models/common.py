@@ -33,13 +33,19 @@ from typing import Callable
 
 import exudyn as exu
 import numpy as np
+from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.itemInterface import (
     LoadForceVector,
     LoadMassProportional,
     LoadTorqueVector,
     MarkerBodyMass,
+    MarkerBodyPosition,
     MarkerBodyRigid,
+    MarkerNodeCoordinate,
+    NodePointGround,
     NodeRigidBody2D,
+    ObjectConnectorCartesianSpringDamper,
+    ObjectConnectorCoordinateSpringDamper,
     ObjectGround,
     ObjectJointPrismatic2D,
     ObjectJointRevolute2D,
@@ -52,6 +58,7 @@ from study import mechanisms
 from study.results import SimulationResult, package_versions
 
 OVT = exu.OutputVariableType
+esym = exu.symbolic
 Array = np.ndarray
 
 #: Implicit solvers of a run: 'index3' = GeneralizedAlpha with index-3 (position-level) constraints;
@@ -85,6 +92,21 @@ SEED_TOLERANCE = 1e-13
 #: ... or after this many iterations (the map contracts by ~mu * |tan| of the guide geometry, < 0.1
 #: for the study's cases, so 40 iterations are far more than ever needed).
 SEED_MAX_ITERATIONS = 40
+
+#: The two Exudyn configurations of a run (``configuration`` of ``run``):
+#: 'python': every state-dependent load law is a Python load user function, full Newton (Jacobian
+#: every iteration), the load Jacobian differentiated numerically where a friction contact needs it;
+#: 'tuned': what Exudyn's documentation and examples recommend for speed (symbolic user functions,
+#: ``exudyn.symbolic``, instead of Python ones wherever Exudyn has an element whose user function sees
+#: the law's inputs; modified Newton, i.e. the Jacobian reused while the iteration contracts). See
+#: CONFIGURATION_DESCRIPTIONS and study.exudyn_models.translate for what stays Python and why.
+CONFIGURATIONS = ("python", "tuned")
+CONFIGURATION_DESCRIPTIONS = {
+    "python": "load laws as Python user functions (LoadForceVector/LoadTorqueVector), full Newton",
+    "tuned": "load laws as Exudyn symbolic user functions of connectors (no Python in the time loop) where "
+             "Exudyn offers one, constant loads as plain loads, modified Newton (Jacobian reused); laws Exudyn "
+             "cannot express that way, and the friction reading a joint reaction, stay Python user functions",
+}
 
 ExudynModelError = exu.ModelError
 ExudynSolverError = exu.SolverError
@@ -129,7 +151,7 @@ class RunGrid:
 
 
 def check_arguments(t_end: float, h: float, solver: str, output_step: float | None,
-                    friction: str, eps: float) -> RunGrid:
+                    friction: str, eps: float, configuration: str = "python") -> RunGrid:
     """Validate the arguments of a ``run`` and return its time grid.
 
     Raises
@@ -144,6 +166,8 @@ def check_arguments(t_end: float, h: float, solver: str, output_step: float | No
         problems.append(f"unknown solver {solver!r}; valid choices: {', '.join(SOLVERS)}")
     if friction not in FRICTION_MODES:
         problems.append(f"unknown friction mode {friction!r}; valid choices: {', '.join(FRICTION_MODES)}")
+    if configuration not in CONFIGURATIONS:
+        problems.append(f"unknown Exudyn configuration {configuration!r}; valid choices: {', '.join(CONFIGURATIONS)}")
     for name, value in (("t_end", t_end), ("h", h), ("eps", eps)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
             problems.append(f"{name} = {value!r} must be a finite number > 0")
@@ -163,7 +187,7 @@ def check_arguments(t_end: float, h: float, solver: str, output_step: float | No
 
 
 def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
-                        ignore_singular: bool = False) -> exu.SimulationSettings:
+                        configuration: str = "python", ignore_singular: bool = False) -> exu.SimulationSettings:
     """Exudyn settings of a fixed-step run; writes no files.
 
     Parameters
@@ -175,6 +199,14 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
         numerically w.r.t. position and velocity coordinates (needed for the regularized friction:
         with 0, Newton diverges on tanh(v/1e-3) friction); 0 leaves loads out of the Jacobian
         (the translator says when that is enough: study.exudyn_models.translate.loads_jacobian).
+    configuration : one of CONFIGURATIONS
+        'tuned' switches on modified Newton with one Jacobian per step (``newton.useModifiedNewton``,
+        ``modifiedNewtonJacUpdatePerStep``: the step's Jacobian is reused by its iterations, and
+        recomputed early only if they stop contracting); the tolerances are the same, so a converged
+        step passes the same residual test. Measured on the quick-return (smooth law, 2 s, h = 1e-4,
+        index 3): full Newton 2 iterations and 2 Jacobians per step, 1.44 s; this setting 2 iterations
+        and 1 Jacobian, 1.09 s; Exudyn's default modified Newton (Jacobian kept across steps) 7
+        iterations per step at this tolerance, 1.80 s.
     ignore_singular : bool
         Exudyn's documented option for redundant constraints and singular poses
         (``linearSolver.ignoreSingularJacobian``, Exudyn example fourBarMechanism3D.py): a singular
@@ -188,7 +220,8 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
     ti.adaptiveStep = False                  # fixed step h; a Newton failure raises
     ti.newton.relativeTolerance = NEWTON_TOLERANCE
     ti.newton.absoluteTolerance = NEWTON_TOLERANCE
-    ti.newton.useModifiedNewton = False      # full Newton: Jacobian every iteration
+    ti.newton.useModifiedNewton = configuration == "tuned"   # else full Newton: Jacobian every iteration
+    ti.newton.modifiedNewtonJacUpdatePerStep = configuration == "tuned"
     ti.newton.maxIterations = NEWTON_MAX_ITERATIONS
     ti.generalizedAlpha.spectralRadius = SPECTRAL_RADIUS
     ti.generalizedAlpha.computeInitialAccelerations = True
@@ -239,6 +272,7 @@ class Model:
     bodies: dict = field(default_factory=dict)      # name -> (node, object, mass, inertia, reference[3])
     joints: dict = field(default_factory=dict)      # name -> (object, kind)
     sensors: dict = field(default_factory=dict)     # key -> sensor number
+    symbolic: list = field(default_factory=list)    # symbolic user functions (kept alive for the run)
     pre_step: list = field(default_factory=list)    # callables (mbs, t) -> None
     post_step: list = field(default_factory=list)
 
@@ -310,6 +344,54 @@ class Model:
                                                     loadVector=[float(value[0]), float(value[1]), 0.0]))
         return self.mbs.AddLoad(LoadForceVector(markerNumber=marker, loadVector=[0.0, 0.0, 0.0],
                                                 loadVectorUserFunction=user))
+
+    def point_law(self, marker: int, law: Callable) -> int:
+        """A force at a body marker given by ``law(t, (x, y), (vx, vy)) -> (fx, fy)`` (global frame) of the
+        marker's global position and velocity, as an Exudyn symbolic user function (no Python per call).
+
+        Built as ObjectConnectorCartesianSpringDamper between a ground marker at the origin (marker 0)
+        and the body marker (marker 1), with zero stiffness and damping: its ``displacement`` is the
+        marker's global position and ``velocity`` its velocity, and the force returned by the user
+        function acts on marker 1 with the opposite sign (verified against LoadForceVector in
+        tests/test_exudyn_tuned.py), so the function returns -law.
+        """
+        origin = self.mbs.AddMarker(MarkerBodyPosition(bodyNumber=self.ground, localPosition=[0.0, 0.0, 0.0]))
+        obj = self.mbs.AddObject(ObjectConnectorCartesianSpringDamper(markerNumbers=[origin, marker],
+                                                                      stiffness=[0.0] * 3, damping=[0.0] * 3,
+                                                                      offset=[0.0] * 3))
+
+        def springForceUserFunction(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+            fx, fy = law(t, (displacement[0], displacement[1]), (velocity[0], velocity[1]))
+            return [-fx, -fy, 0.0 * fx]
+        self._symbolic(obj, springForceUserFunction)
+        return obj
+
+    def angle_law(self, body: str, law: Callable) -> int:
+        """A torque on a body given by ``law(t, angle, rate) -> torque`` of its absolute angle and angular
+        velocity, as an Exudyn symbolic user function (no Python per call).
+
+        Built as ObjectConnectorCoordinateSpringDamper between a ground coordinate (marker 0) and the
+        node's rotation coordinate (marker 1), zero stiffness and damping: ``displacement`` is the
+        rotation coordinate (the displacement from the node's reference angle, which is added here),
+        ``velocity`` the angular velocity; the returned force acts on marker 1 with the opposite sign
+        (verified against LoadTorqueVector in tests/test_exudyn_tuned.py), so the function returns -law.
+        """
+        node, _, _, _, ref = self.bodies[body]
+        ground = self.mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=self.mbs.AddNode(NodePointGround()), coordinate=0))
+        rotation = self.mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=2))
+        obj = self.mbs.AddObject(ObjectConnectorCoordinateSpringDamper(markerNumbers=[ground, rotation], stiffness=0.0,
+                                                                       damping=0.0))
+        reference = float(ref[2])
+
+        def springForceUserFunction(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
+            return -law(t, displacement + reference, velocity)
+        self._symbolic(obj, springForceUserFunction)
+        return obj
+
+    def _symbolic(self, obj: int, function: Callable) -> None:
+        sym = CreateSymbolicUserFunction(self.mbs, function, "springForceUserFunction", obj)
+        self.mbs.SetObjectParameter(obj, "springForceUserFunction", sym)
+        self.symbolic.append(sym)
 
     def joint_output(self, name: str, ovt=None) -> Array:
         obj, kind = self.joints[name]
@@ -484,14 +566,14 @@ def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictio
 # (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
 # ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
 def run_model(build, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
-              eps: float, ignore_singular: bool = False) -> SimulationResult:
+              eps: float, configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
     """Build the model at the in-house consistent initial state, solve it, return its result."""
-    grid = check_arguments(t_end, h, solver, output_step, friction, eps)
+    grid = check_arguments(t_end, h, solver, output_step, friction, eps, configuration)
     eom = mechanisms.equations(ps)
     state0 = mechanisms.initial_state(ps, eom)
-    built = build(ps, state0.q, state0.qd, friction, eps)
-    settings = simulation_settings(grid, solver, built.loads_jacobian, ignore_singular)
-    stats = {}
+    built = build(ps, state0.q, state0.qd, friction, eps, configuration)
+    settings = simulation_settings(grid, solver, built.loads_jacobian, configuration, ignore_singular)
+    stats = {"configuration": configuration}
     if solver in IMPLICIT_SOLVERS:
         stats.update(seed_reaction_guards(built.model, settings, built.frictions))
     stats.update(solve(built.model, settings, solver))
@@ -599,6 +681,8 @@ def assemble_result(eom, ps, grid: RunGrid, solver: str, eps: float, friction: s
         "method": f"exudyn_{solver}",
         "solver": solver,
         "solver_description": SOLVER_DESCRIPTIONS[solver],
+        "configuration": stats.get("configuration", "python"),
+        "configuration_description": CONFIGURATION_DESCRIPTIONS[stats.get("configuration", "python")],
         "h": grid.h,
         "t_end": grid.t_end,
         "output_step": grid.h * grid.stride,

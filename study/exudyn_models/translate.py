@@ -24,6 +24,14 @@ Model
   node angular velocity. A mode symbol is +1 if its switching function (evaluated live on the same
   inputs) is >= 0, else -1: the law is evaluated without event location, as Exudyn cannot locate a
   switch within a step.
+* ``configuration='tuned'`` (what Exudyn's documentation recommends for speed; 'python' is the
+  above): a law whose inputs are all those of the element carrying it is recorded once as an Exudyn
+  symbolic user function (``exudyn.symbolic``, evaluated in C++, no Python per call): a point force
+  reading only its point's x, y, vx, vy as ObjectConnectorCartesianSpringDamper from the ground
+  origin, a torque reading only its body's angle and rate as ObjectConnectorCoordinateSpringDamper on
+  the rotation coordinate (see common.Model.point_law / angle_law); other laws and the friction (it
+  reads a joint reaction, which only Python can) stay Python user functions; Newton reuses one
+  Jacobian per step. tests/test_exudyn_tuned.py checks both configurations give the same answers.
 * Potentials (springs): user-function torques / forces = minus the gradient of the energy with
   respect to the angle and point-position inputs; their energy is part of the result's potential.
 * Friction: a prismatic joint with :class:`~study.model.joints.Friction` data whose kinetic
@@ -138,11 +146,18 @@ def _rotation(a) -> Array:
 # --------------------------------------------------------------------------------------------
 # load laws: lambdified once, evaluated from Exudyn's kinematics (live) or from its body series
 # --------------------------------------------------------------------------------------------
+#: sympy function names -> Exudyn symbolic functions, for laws recorded as symbolic user functions
+_ESYM = {name: getattr(common.esym, name) for name in ("sin", "cos", "tan", "tanh", "sinh", "cosh", "exp", "log",
+                                                        "sqrt", "atan", "atan2", "asin", "acos", "sign")}
+_ESYM["Abs"] = common.esym.abs
+
+
 class Law:
     """Expressions in the description's inputs, t and mode symbols, with the parameter values bound."""
 
     def __init__(self, d: Description, subs: dict, exprs):
         exprs = [sp.sympify(e).xreplace(subs) for e in exprs]
+        self.exprs = exprs
         syms = set().union(*(e.free_symbols for e in exprs))
         switches = [(name, sp.sympify(e).xreplace(subs), m) for name, e, m in d.switches if m in syms]
         inputs = syms | set().union(set(), *(e.free_symbols for _, e, _ in switches))
@@ -154,10 +169,25 @@ class Law:
         self.f = sp.lambdify([*args, *self.modes], exprs, "math")
         self.switch_f = [sp.lambdify(args, e, "math") for _, e, _ in switches]
         self.values = [float(e) for e in exprs] if self.constant else None
+        self._args = [*args, *self.modes]
+        self._switch_exprs = [e for _, e, _ in switches]
 
     def __call__(self, t: float, inputs) -> list[float]:
         modes = [1.0 if s(t, *inputs) >= 0 else -1.0 for s in self.switch_f]
         return self.f(t, *inputs, *modes)
+
+    def symbolic(self):
+        """The law as a function of Exudyn symbolic values (``exudyn.symbolic``), for recording a symbolic
+        user function: same arguments as ``__call__``; a mode is IfThenElse(switch >= 0, 1, -1), the
+        same rule as the Python evaluation."""
+        esym = common.esym
+        f = sp.lambdify(self._args, self.exprs, modules=[_ESYM])
+        switch_f = [sp.lambdify(self._args[:1 + len(self.inputs)], e, modules=[_ESYM]) for e in self._switch_exprs]
+
+        def evaluate(t, inputs):
+            modes = [esym.IfThenElse(s(t, *inputs) >= 0, esym.Real(1.0), esym.Real(-1.0)) for s in switch_f]
+            return f(t, *inputs, *modes)
+        return evaluate
 
 
 class Readers:
@@ -250,7 +280,9 @@ class Built:
     friction: str
     eps: float
     loads_jacobian: int
+    configuration: str = "python"
     laws: dict = field(default_factory=dict)          # load name -> Law
+    evaluation: dict = field(default_factory=dict)    # law name -> how Exudyn evaluates it
     potentials: dict = field(default_factory=dict)    # potential name -> Law (energy)
     frictions_by_contact: dict = field(default_factory=dict)
     normals: dict = field(default_factory=dict)       # prismatic joint -> n in the guide's body frame
@@ -354,6 +386,7 @@ class Built:
         meta = {
             "description": d.name,
             "loads_jacobian": self.loads_jacobian,
+            "law_evaluation": dict(self.evaluation),
             "lam_mapping": self.lam_mapping(rows),
             "reaction_reading": ("hybrid guard: live Newton iterate of the guide reaction, last accepted value "
                                  "while the live one is the zero of the first Newton iteration; initial "
@@ -409,8 +442,15 @@ class Built:
         return out
 
 
-def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = common.DEFAULT_EPS) -> Built:
-    """Assemble the Exudyn model of ``ps``'s description at the state (q0, qd0) (relative coordinates)."""
+def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = common.DEFAULT_EPS,
+          configuration: str = "python") -> Built:
+    """Assemble the Exudyn model of ``ps``'s description at the state (q0, qd0) (relative coordinates).
+
+    ``configuration`` (common.CONFIGURATIONS): 'python' evaluates every state-dependent law in a
+    Python load user function; 'tuned' records it as an Exudyn symbolic user function where the law's
+    inputs are those of the element carrying it (:func:`_symbolic_law`), else keeps the Python one, and
+    leaves the numerical load Jacobian off unless a Python load remains that needs it (the friction).
+    """
     kin = _kinematics(ps)
     d, subs = kin.d, kin.subs
     val = lambda e: float(sp.sympify(e).xreplace(subs))  # noqa: E731
@@ -428,7 +468,7 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
             markers[(body, point)] = model.marker(body, (val(xy[0]), val(xy[1])))
         return markers[(body, point)]
 
-    built = Built(ps, d, kin, model, friction, eps, loads_jacobian(d))
+    built = Built(ps, d, kin, model, friction, eps, loads_jacobian(d), configuration)
     built.q0 = np.asarray(q0, dtype=float).copy()
     for j in d.joints:
         if isinstance(j, Revolute):
@@ -462,9 +502,14 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
                 model.torque(m, value=law.values[0])
             else:
                 model.force(m, value=tuple(law.values))
+            built.evaluation[load.name] = "constant load"
+            continue
+        if configuration == "tuned" and _symbolic_law(model, law, load.body, load.point, m):
+            built.evaluation[load.name] = "symbolic user function"
             continue
         model_load = _user_function(law, readers.reader(law), torque=load.point is None)
         (model.torque if load.point is None else model.force)(m, user=model_load)
+        built.evaluation[load.name] = "Python user function"
 
     for pot in d.potentials:
         built.potentials[pot.name] = Law(d, subs, [pot.energy])
@@ -481,11 +526,17 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
             kinds = dict(syms)
             if point is None:
                 law = Law(d, subs, [-sp.diff(pot.energy, kinds["angle"])])
-                model.torque(com(body), user=_user_function(law, readers.reader(law), torque=True))
+                m = com(body)
             else:
-                comps = [-sp.diff(pot.energy, kinds[k]) if k in kinds else sp.Integer(0) for k in ("x", "y")]
-                law = Law(d, subs, comps)
-                model.force(marker(body, point), user=_user_function(law, readers.reader(law), torque=False))
+                law = Law(d, subs, [-sp.diff(pot.energy, kinds[k]) if k in kinds else sp.Integer(0) for k in ("x", "y")])
+                m = marker(body, point)
+            key = f"{pot.name} on {body}" + (f".{point}" if point else "")
+            if configuration == "tuned" and _symbolic_law(model, law, body, point, m):
+                built.evaluation[key] = "symbolic user function"
+                continue
+            user = _user_function(law, readers.reader(law), torque=point is None)
+            (model.torque if point is None else model.force)(m, user=user)
+            built.evaluation[key] = "Python user function"
 
     if friction == "regularized":
         for j in d.contacts():
@@ -501,8 +552,42 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
                                  resistance=val(j.friction.resistance), eps=eps)
             model.force(marker(*j.slider), user=fric)
             built.frictions_by_contact[j.name] = fric
+            built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
+                                                      "mbs.GetObjectOutput; no Exudyn element or symbolic user "
+                                                      "function has access to it)")
+    if configuration == "tuned" and not built.frictions:
+        built.loads_jacobian = 0    # no Python load left whose derivative Newton needs
     model.assemble()
     return built
+
+
+def _symbolic_law(model: Model, law: Law, body: str, point: str | None, marker: int) -> bool:
+    """Record ``law`` as an Exudyn symbolic user function if Exudyn has an element whose user function
+    sees exactly the law's inputs, and say whether it did.
+
+    * a force at a body point whose law reads only that point's x, y, vx, vy (and t, modes):
+      ObjectConnectorCartesianSpringDamper from the ground origin to the point (Model.point_law);
+    * a torque on a body whose law reads only that body's angle and rate (and t, modes):
+      ObjectConnectorCoordinateSpringDamper on its rotation coordinate (Model.angle_law).
+
+    Any other law (e.g. a spring between two bodies' points) stays a Python load user function.
+    """
+    if point is not None and all(k.body == body and k.point == point for k in law.kinds):
+        f, kinds = law.symbolic(), [k.kind for k in law.kinds]
+
+        def force(t, pos, vel):
+            values = {"x": pos[0], "y": pos[1], "vx": vel[0], "vy": vel[1]}
+            return f(t, [values[k] for k in kinds])
+        model.point_law(marker, force)
+        return True
+    if point is None and all(k.body == body and k.point is None for k in law.kinds):
+        f, kinds = law.symbolic(), [k.kind for k in law.kinds]
+
+        def torque(t, angle, rate):
+            return f(t, [angle if k == "angle" else rate for k in kinds])[0]
+        model.angle_law(body, torque)
+        return True
+    return False
 
 
 def _user_function(law: Law, read, torque: bool):
@@ -520,7 +605,7 @@ def _user_function(law: Law, read, torque: bool):
 
 def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
         friction: str = "regularized", eps: float = common.DEFAULT_EPS,
-        ignore_singular: bool = False) -> SimulationResult:
+        configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
     """Simulate a parameter set's mechanism in Exudyn from the in-house consistent initial state.
 
     Parameters
@@ -537,6 +622,9 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
         'none' leaves out the Coulomb friction and resistance of every contact.
     eps : float
         Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (common.DEFAULT_EPS).
+    configuration : {'python', 'tuned'}
+        How Exudyn evaluates the load laws and iterates (common.CONFIGURATIONS); both solve the same
+        model, 'tuned' as Exudyn recommends for speed.
     ignore_singular : bool
         Exudyn's option for redundant constraints / singular poses (common.simulation_settings).
 
@@ -544,7 +632,7 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
     -------
     SimulationResult (see the module docstring for the mapping of every quantity)
     """
-    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps, ignore_singular)
+    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps, configuration, ignore_singular)
 
 
 def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized",

@@ -23,12 +23,13 @@ import hashlib
 import importlib
 import json
 import subprocess
+import time
 from pathlib import Path
 
 import pandas as pd
 
 from study.pipeline import CASES_DIR, PIPELINE_RECORD, Store, load_case_lists
-from study.report.context import ReportContext
+from study.report.context import ReportContext, default_render_workers
 from study.report.render import markdown_to_html, md_table, number_figures, png_data_uri
 from study.results import package_versions
 
@@ -110,7 +111,7 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     root = reports_dir.resolve().parent
     store = Store(cache_dir / "runs")
     case_lists = {cl.study: cl for cl in load_case_lists(cases_dir)}
-    ctx = ReportContext(reports_dir, store, case_lists)
+    ctx = ReportContext(reports_dir, store, case_lists, render_workers=default_render_workers())
     figures_dir = reports_dir / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
 
@@ -119,8 +120,22 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
              "simulation. Every number below is read from a saved file (the tables in `tables/` and the "
              "saved runs); the inputs and their SHA-256 are listed in [`manifest.json`](manifest.json). "
              "The same content as one self-contained page is [`report.html`](report.html).", ""]
-    for name in SECTIONS:
-        lines += importlib.import_module(f"study.report.sections.{name}").section(ctx)
+    stages = {}
+    try:
+        for name in SECTIONS:
+            ts = time.perf_counter()
+            lines += importlib.import_module(f"study.report.sections.{name}").section(ctx)
+            stages[f"report:{name}"] = time.perf_counter() - ts
+    finally:
+        ts = time.perf_counter()
+        ctx.finish_figures()
+        stages["report:render figures (waiting for the workers)"] = time.perf_counter() - ts
+    # the report's own stage times and figure counts change from build to build: timing/, not the manifest
+    timing = pd.DataFrame([{"stage": k, "wall_s": v} for k, v in stages.items()] +
+                          [{"stage": f"figures {k}", "wall_s": float(v)} for k, v in ctx.figure_stats.items()] +
+                          [{"stage": "figure render workers", "wall_s": float(ctx.render_workers)}])
+    (reports_dir / "timing").mkdir(parents=True, exist_ok=True)
+    timing.to_csv(reports_dir / "timing" / "report_timing.csv", index=False)
 
     written = {p.name for p in ctx.figures_written} | {p.with_suffix(".svg").name for p in ctx.figures_written}
     for stale in sorted(figures_dir.iterdir()):

@@ -8,9 +8,15 @@ with ``ctx.figure(fig, stem, alt)``, which saves PNG + SVG and returns the Markd
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+import time
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
@@ -37,6 +43,11 @@ class ReportContext:
     case_lists: dict[str, CaseList]
     figures_written: list[Path] = field(default_factory=list)
     inputs: list[Path] = field(default_factory=list)
+    render_workers: int = 0                # > 1: figures are rendered in that many processes
+    figure_stats: dict = field(default_factory=lambda: {"rendered": 0, "cached": 0})
+    _pending: list = field(default_factory=list)
+    _pool: Executor | None = None
+    _keys: dict | None = None
 
     def cases(self, study: str, **criteria) -> list[Case]:
         """The study's cases matching ``criteria`` (fields, options or labels; see Case.matches)."""
@@ -67,7 +78,111 @@ class ReportContext:
         return pd.read_csv(path, dtype=str, keep_default_na=False) if as_text else pd.read_csv(path)
 
     def figure(self, fig: Figure, stem: str, alt: str) -> str:
-        """Save ``fig`` as ``figures/<stem>.png`` and ``.svg``; returns the Markdown image line."""
-        png = save_figure(fig, self.reports_dir / "figures", stem)
+        """Save ``fig`` as ``figures/<stem>.png`` and ``.svg``; returns the Markdown image line.
+
+        Cached by the hash of the figure's content (:func:`figure_key`): when ``figures/<stem>.png``
+        and ``.svg`` exist and were rendered from the same key (``figures/figure_keys.json``), they are
+        kept as they are. Otherwise the figure is rendered, in a worker process when
+        ``render_workers > 1`` (call :meth:`finish_figures` before reading the files).
+        """
+        import matplotlib.pyplot as plt
+
+        folder = self.reports_dir / "figures"
+        png = folder / f"{stem}.png"
         self.figures_written.append(png)
+        key = figure_key(fig)
+        keys = self._figure_keys()
+        if keys.get(stem) == key and png.exists() and png.with_suffix(".svg").exists():
+            self.figure_stats["cached"] += 1
+            plt.close(fig)
+            return f"![{alt}](figures/{png.name})"
+        keys.pop(stem, None)
+        self.figure_stats["rendered"] += 1
+        if self.render_workers > 1:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(self.render_workers)
+            self._pending.append((stem, key, self._pool.submit(save_figure, fig, folder, stem)))
+        else:
+            save_figure(fig, folder, stem)
+            keys[stem] = key
+        plt.close(fig)
         return f"![{alt}](figures/{png.name})"
+
+    def _figure_keys(self) -> dict:
+        if self._keys is None:
+            path = self.reports_dir / "figures" / FIGURE_KEYS
+            self._keys = json.loads(path.read_text()) if path.exists() else {}
+        return self._keys
+
+    def finish_figures(self) -> None:
+        """Wait for the figures rendered in worker processes, then save the figure keys."""
+        keys = self._figure_keys()
+        try:
+            for stem, key, future in self._pending:
+                future.result()
+                keys[stem] = key
+        finally:
+            self._pending.clear()
+            if self._pool is not None:
+                self._pool.shutdown()
+                self._pool = None
+            folder = self.reports_dir / "figures"
+            folder.mkdir(parents=True, exist_ok=True)
+            (folder / FIGURE_KEYS).write_text(json.dumps(dict(sorted(keys.items())), indent=1) + "\n")
+
+
+FIGURE_KEYS = "figure_keys.json"
+# What a figure's pixels depend on besides its artists: the drawing and saving code (style, DPI, palette).
+_FIGURE_CODE = hashlib.sha256((Path(__file__).resolve().parent / "figures.py").read_bytes()).hexdigest()
+_GETTERS = ("get_xydata", "get_offsets", "get_array", "get_text", "get_color", "get_facecolor", "get_edgecolor",
+            "get_linestyle", "get_linewidth", "get_marker", "get_markersize", "get_markerfacecolor", "get_label",
+            "get_visible", "get_zorder", "get_alpha", "get_xlim", "get_ylim", "get_xscale", "get_yscale",
+            "get_position", "get_fontsize", "get_size_inches", "get_sizes", "get_hatch", "get_fillstyle", "get_ha",
+            "get_va", "get_rotation", "get_width", "get_height", "get_xy", "get_paths")
+
+
+def figure_key(fig: Figure) -> str:
+    """SHA-256 of what a figure draws: every artist's type, data and appearance (the getters in
+    ``_GETTERS``), and the source of :mod:`study.report.figures` (styles, DPI, palette).
+
+    Two figures built from the same saved inputs get the same key (tested); any change of a plotted
+    value, label, limit, colour or of the drawing code changes it.
+    """
+    h = hashlib.sha256(_FIGURE_CODE.encode())
+    for artist in fig.findobj():
+        h.update(type(artist).__name__.encode())
+        for name in _GETTERS:
+            getter = getattr(artist, name, None)
+            if getter is None:
+                continue
+            try:
+                value = getter()
+            except (TypeError, ValueError, AttributeError, NotImplementedError):
+                continue   # a getter that needs arguments or does not apply to this artist
+            if value is None:
+                continue
+            if hasattr(value, "get_points"):
+                value = value.get_points()
+            if name == "get_paths":
+                value = [p.vertices for p in value]
+                h.update(name.encode() + b"".join(np.ascontiguousarray(v, dtype=float).tobytes() for v in value))
+                continue
+            try:
+                arr = np.asarray(value)
+            except (TypeError, ValueError):
+                arr = None
+            if arr is not None and arr.dtype.kind in "fiub":
+                h.update(name.encode() + np.ascontiguousarray(arr, dtype=float).tobytes())
+            else:
+                h.update(name.encode() + repr(value).encode())
+    return h.hexdigest()
+
+
+def default_render_workers() -> int:
+    """Processes for rendering figures: $STUDY_RENDER_WORKERS, else the CPUs available (at most 4)."""
+    value = os.environ.get("STUDY_RENDER_WORKERS")
+    if value is not None:
+        if not value.isdigit() or int(value) < 1:
+            raise ValueError(f"STUDY_RENDER_WORKERS = {value!r} must be a whole number >= 1")
+        return int(value)
+    return min(4, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))

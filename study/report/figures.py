@@ -145,7 +145,7 @@ def constraint_violation_figure(runs: Mapping[str, SimulationResult], setting: s
                      f"integrator {setting}, every stabilization method")
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), title="method", frameon=False)
         ax.set_xlim(float(first.t[0]), float(first.t[-1]))
-        fig.tight_layout()
+        fig.set_layout_engine("tight")   # laid out when drawn: in the render worker, skipped when cached
     return fig
 
 
@@ -181,7 +181,7 @@ def trajectories_figure(reference: SimulationResult, runs: Mapping[str, Simulati
         handles, labels = axes[1, 0].get_legend_handles_labels()
         fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
                    title="method")
-        fig.tight_layout(rect=(0, 0.1, 1, 1))
+        fig.set_layout_engine("tight", rect=(0, 0.1, 1, 1))
     return fig
 
 
@@ -227,7 +227,7 @@ def heatmap_figure(table: pd.DataFrame, value: str, settings: Sequence[str], met
         ax.set_ylabel("stabilization method")
         ax.set_title(title)
         fig.colorbar(image, ax=ax, label=colorbar_label)
-        fig.tight_layout()
+        fig.set_layout_engine("tight")   # laid out when drawn: in the render worker, skipped when cached
     return fig
 
 
@@ -259,7 +259,7 @@ def stacked_time_series_figure(panels: Sequence[tuple[str, Sequence[Series]]], t
             ax.legend(loc="best", frameon=False)
         axes[-1].set_xlabel(xlabel)
         axes[0].set_title(title)
-        fig.tight_layout()
+        fig.set_layout_engine("tight")   # laid out when drawn: in the render worker, skipped when cached
     return fig
 
 
@@ -304,7 +304,7 @@ def log_lines_figure(panels: Sequence[Mapping], title: str, figsize: tuple[float
             else:
                 ax.legend(loc=panel.get("legend_loc", "best"), frameon=False, title=panel.get("legend_title"))
         fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
+        fig.set_layout_engine("tight")   # laid out when drawn: in the render worker, skipped when cached
     return fig
 
 
@@ -373,8 +373,12 @@ _BENCH_STYLES = {("in-house compiled", "DOP853"): {"color": "tab:blue", "marker"
                  ("in-house compiled", "RK45"): {"color": "tab:green", "marker": "o", "ls": "-"},
                  ("in-house compiled", "RK4"): {"color": "tab:olive", "marker": "^", "ls": "-"},
                  ("in-house reference", "DOP853"): {"color": "0.45", "marker": "o", "ls": ":"},
-                 ("Exudyn", "index3"): {"color": "tab:red", "marker": "s", "ls": "--"},
-                 ("Exudyn", "index2"): {"color": "tab:purple", "marker": "D", "ls": "--"}}
+                 ("Exudyn tuned", "index3"): {"color": "tab:red", "marker": "s", "ls": "--"},
+                 ("Exudyn tuned", "index2"): {"color": "tab:purple", "marker": "D", "ls": "--"},
+                 ("Exudyn (Python user functions)", "index3"): {"color": "tab:red", "marker": "s", "ls": ":",
+                                                                "mfc": "none"},
+                 ("Exudyn (Python user functions)", "index2"): {"color": "tab:purple", "marker": "D", "ls": ":",
+                                                                "mfc": "none"}}
 
 
 def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = (1e-4, 1e-6, 1e-8)) -> Figure:
@@ -395,7 +399,7 @@ def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = 
         series = []
         for (engine, method), runs in g.groupby(["engine", "method"], sort=False):
             runs = runs[runs["error"].notna() & runs["cpu_s"].notna()].sort_values("setting", ascending=False)
-            what = "h" if engine == "Exudyn" or method == "RK4" else "rtol"
+            what = "h" if engine.startswith("Exudyn") or method == "RK4" else "rtol"
             label = f"{engine} {method} ({what} {runs['setting'].max():.3g} … {runs['setting'].min():.3g})"
             series.append((label, runs["cpu_s"], runs["error"],
                            {"ms": 4, "lw": 1.2, **_BENCH_STYLES.get((engine, method), {"color": "tab:gray"})}))
