@@ -314,6 +314,8 @@ def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
              ("Exudyn tuned", "index3", [OUTPUT_STEP / 2 ** k for k in range(0, 12)]),
              ("Exudyn tuned", "index2", [OUTPUT_STEP / 2 ** k for k in range(0, 12)])]
     budget = 2.0 if quick else SWEEP_BUDGET
+    friction = (f"{extra['friction']} friction, ε = {extra.get('friction_eps', EPS):g} m/s" if extra.get("friction")
+                else "")
     run_budget = 4.0 if quick else EXUDYN_RUN_BUDGET
 
     def run_one(engine, method, setting, stage):
@@ -321,13 +323,13 @@ def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
             cpu, r = _closure(mech, variant, t_end, extra, engine, method, setting)()
         except Exception as exc:  # a failed setting is recorded, not hidden
             log(f"(b) {mech} {engine} {method} {setting:g}: failed: {exc}")
-            rows.append({"mechanism": mech, "variant": variant, "engine": engine, "method": method,
+            rows.append({"mechanism": mech, "variant": variant, "friction": friction, "engine": engine, "method": method,
                          "setting": setting, "error": np.nan, "cpu_s": np.nan, "repeats": 0, "stage": stage,
                          "note": str(exc)[:200]})
             return np.nan, np.nan
         err = max_dq(r, ref)
-        rows.append({"mechanism": mech, "variant": variant, "engine": engine, "method": method, "setting": setting,
-                     "error": err, "cpu_s": cpu, "repeats": 1, "stage": stage, "note": "",
+        rows.append({"mechanism": mech, "variant": variant, "friction": friction, "engine": engine, "method": method,
+                     "setting": setting, "error": err, "cpu_s": cpu, "repeats": 1, "stage": stage, "note": "",
                      "nfev": r.stats.get("nfev", np.nan)})
         log(f"(b) {mech} {engine} {method} setting {setting:.4g} ({stage}): max|dq| {err:.2e}, cpu {cpu:.4f} s")
         return err, cpu

@@ -387,8 +387,9 @@ def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = 
     Parameters
     ----------
     wp : DataFrame
-        Columns mechanism, variant, t_end, engine, method, setting, error, cpu_s (one row per run).
-        Runs with an error of exactly 0 or NaN are left out (log axes).
+        Columns mechanism, variant, t_end, engine, method, setting, error, cpu_s (one row per run), and
+        optionally friction (how the contacts' friction ran, e.g. 'regularized friction, ε = 0.001 m/s';
+        shown in the panel's title). Runs with an error of exactly 0 or NaN are left out (log axes).
     levels : sequence of float
         Accuracy levels drawn as dotted horizontal lines [rad].
     """
@@ -403,7 +404,8 @@ def benchmark_work_precision_figure(wp: pd.DataFrame, levels: Sequence[float] = 
             label = f"{engine} {method} ({what} {runs['setting'].max():.3g} … {runs['setting'].min():.3g})"
             series.append((label, runs["cpu_s"], runs["error"],
                            {"ms": 4, "lw": 1.2, **_BENCH_STYLES.get((engine, method), {"color": "tab:gray"})}))
-        friction = " (regularized friction, ε = 1e-3 m/s)" if mech == "slider_crank" else ""
+        described = g["friction"].dropna().iloc[0] if "friction" in g and g["friction"].notna().any() else ""
+        friction = f" ({described})" if described else ""
         panels.append({"xlabel": "CPU time of the integration [s] (this machine)",
                        "ylabel": "max |q − q_ref| over samples and coordinates [rad]", "series": series,
                        "title": f"{mech.replace('_', '-')}: variant {g['variant'].iloc[0]}, "
