@@ -134,6 +134,10 @@ def _run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    for study, r in record["studies"].items():
+        if r.get("expected_failures"):
+            print(f"{study}: {len(r['expected_failures'])} cases stopped with the error their case list expects "
+                  f"(expect_error; listed in tables/failed_cases.csv)", file=sys.stderr)
     failed = {s: r["failed"] for s, r in record["studies"].items() if r["failed"]}
     for study, cases in failed.items():
         for name, error in cases.items():

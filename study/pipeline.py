@@ -80,7 +80,7 @@ CODE_PATHS = {
 NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
 _GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude", "backend",
-               "reference_sample"}
+               "reference_sample", "expect_error"}
 BACKENDS = ("reference", "compiled")
 SAMPLE_SUFFIX = ":reference_sample"   # group name of the reference-path twins of a compiled group
 _FIELD_SWEEPS = ("mechanism", "variant", "t_end")
@@ -115,6 +115,9 @@ class Case:
     t_end: float
     options: tuple[tuple[str, Any], ...] = ()
     labels: tuple[tuple[str, str], ...] = ()
+    # The error class this run is expected to stop with (its failure record is the result, e.g. a method
+    # that cannot pass a singular position); "" = expected to finish (and then left out of the key).
+    expect_error: str = ""
 
     @property
     def kwargs(self) -> dict[str, Any]:
@@ -140,6 +143,8 @@ class Case:
             "options": self.kwargs, "parameters": _parameter_hash(self.mechanism, self.variant),
             "code": code_version(self.engine),
         }
+        if self.expect_error:  # two lists expecting different outcomes of one run keep separate records
+            payload["expect_error"] = self.expect_error
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     def matches(self, **criteria) -> bool:
@@ -264,6 +269,9 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
         if not isinstance(values, list) or not values:
             raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
     _check_exclude(g, where)
+    expect = g.get("expect_error", "")
+    if not isinstance(expect, str) or (expect and not expect.isidentifier()):
+        raise CaseListError(f"{where}: expect_error = {expect!r} must name an error class (e.g. 'SolverError')")
     backend = g.get("backend")
     if backend is not None and (engine != "inhouse" or backend not in BACKENDS):
         raise CaseListError(f"{where}: backend = {backend!r} must be one of {BACKENDS}, for engine 'inhouse' only")
@@ -290,7 +298,7 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
         if engine == "exudyn" and "h" not in options:
             raise CaseListError(f"{where}: an Exudyn case needs the step 'h' [s] in its options or sweep")
         cases.append(Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"],
-                          float(t_end), tuple(sorted(options.items())), tuple(labels)))
+                          float(t_end), tuple(sorted(options.items())), tuple(labels), expect))
     return cases
 
 
@@ -554,6 +562,7 @@ class RunSummary:
     cached: int = 0
     computed: int = 0
     failed: dict[str, str] = field(default_factory=dict)
+    expected: dict[str, str] = field(default_factory=dict)  # stopped with the error their case list expects
     rejected: dict[str, str] = field(default_factory=dict)  # saved results that failed their check
     wall_seconds: dict[str, float] = field(default_factory=dict)
 
@@ -610,9 +619,12 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
         except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
             error = f"{type(exc).__name__}: {exc}"
             store.record_failure(case, error, "".join(traceback.format_exception(exc)))
-            summary.failed[case.name] = error
-            progress.update(failed=True)
+            expected = type(exc).__name__ == case.expect_error
+            (summary.expected if expected else summary.failed)[case.name] = error
+            progress.update(failed=not expected)
             continue
+        if case.expect_error:  # saved (its summary shows it), but a case list's claim turned out false
+            summary.failed[case.name] = f"expected to stop with {case.expect_error}, but the run finished"
         store.save(case, result)
         summary.computed += 1
         summary.wall_seconds[case.name] = wall
@@ -670,8 +682,9 @@ def failures_table(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame
         for case in cl.all_cases:
             failure = None if store.has(case) else store.failure(case)
             if failure is not None:
-                rows.append({"study": cl.study, "case": case.name, "key": case.key(), "error": failure["error"]})
-    return pd.DataFrame(rows, columns=["study", "case", "key", "error"])
+                rows.append({"study": cl.study, "case": case.name, "key": case.key(), "error": failure["error"],
+                             "expected": bool(case.expect_error) and failure["error"].startswith(case.expect_error + ":")})
+    return pd.DataFrame(rows, columns=["study", "case", "key", "error", "expected"])
 
 
 def sample_agreement(compiled: SimulationResult, reference: SimulationResult, options: Mapping[str, Any]) -> dict:
@@ -747,7 +760,8 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
             run = run_cases(cl.all_cases, store, executor, title=cl.study, stream=stream)
             record["studies"][cl.study] = {"cases": len(cl.cases), "reference_samples": len(cl.samples),
                                            "cached": run.cached, "computed": run.computed,
-                                           "failed": run.failed, "rejected": run.rejected}
+                                           "failed": run.failed, "expected_failures": run.expected,
+                                           "rejected": run.rejected}
             record["stages"][f"run:{cl.study}"] = time.perf_counter() - ts
             record["case_keys"][cl.study] = {c.name: c.key() for c in cl.all_cases}
     record["stages"]["run"] = time.perf_counter() - t0

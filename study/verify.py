@@ -244,7 +244,7 @@ def perturbed(case: Case, ulps: int) -> Case:
     options = dict(case.options)
     options["perturb_ulps"] = int(ulps)
     return Case(case.study, case.group, case.engine, case.mechanism, case.variant, case.t_end,
-                tuple(sorted(options.items())), case.labels)
+                tuple(sorted(options.items())), case.labels, case.expect_error)
 
 
 def perturbation_check(reports_dir: Path, cache_root: Path, studies: Sequence[str] | None = None,

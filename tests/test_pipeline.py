@@ -120,6 +120,54 @@ sweep = { method = ["none", "magic", "projection"] }
     assert (again.cached, again.computed, len(again.failed)) == (2, 0, 1)
 
 
+def test_expected_errors_are_results_and_a_run_that_finishes_instead_is_a_failure(tmp_path):
+    """expect_error: a case that stops with the named error is an expected stop (recorded, not failed);
+    one that stops with another error, or finishes, is a failure."""
+    path = _write(tmp_path / "cases", """
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "quick_return"
+t_end = 0.05
+expect_error = "ValueError"
+sweep = { method = ["none", "magic"] }
+[[group]]
+name = "other"
+mechanism = "quick_return"
+t_end = 0.05
+expect_error = "SingularConfigurationError"
+sweep = { method = ["magic"] }
+""")
+    cases = pl.load_case_list(path).cases
+    store = pl.Store(tmp_path / "runs")
+    out = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert list(out.expected) == ["demo/g [method=magic]"]
+    assert out.expected["demo/g [method=magic]"].startswith("ValueError: unknown stabilization method 'magic'")
+    assert out.failed == {"demo/g [method=none]": "expected to stop with ValueError, but the run finished",
+                          "demo/other [method=magic]": out.failed["demo/other [method=magic]"]}
+    assert out.failed["demo/other [method=magic]"].startswith("ValueError")
+    table = pl.failures_table([pl.load_case_list(path)], store).set_index("case")
+    assert table.loc["demo/g [method=magic]", "expected"] and not table.loc["demo/other [method=magic]", "expected"]
+
+
+@pytest.mark.parametrize("value", ["", 3, "not a name"])
+def test_expect_error_must_name_an_error_class(tmp_path, value):
+    if value == "":
+        return  # the default: expected to finish
+    path = _write(tmp_path / "cases", f"""
+[study]
+summary = "x"
+[[group]]
+name = "g"
+mechanism = "quick_return"
+t_end = 0.05
+expect_error = {value!r}
+""".replace("'", '"'))
+    with pytest.raises(pl.CaseListError, match="expect_error .* must name an error class"):
+        pl.load_case_list(path)
+
+
 def test_progress_line_counts_done_remaining_failed(tiny, tmp_path, capsys):
     import io
 

@@ -178,8 +178,17 @@ def _failed_section(ctx: ReportContext) -> list[str]:
     table = ctx.table("failed_cases", as_text=True)
     if table is None or table.empty:
         return []
-    rows = [[r.study, r.case, r.error] for r in table.itertuples(index=False)]
-    return ["## Failed cases", "",
-            f"{len(rows)} cases failed; the sections above show what could be computed without them. "
-            "Each failure's traceback is saved next to where its result would be (`*.failed.json`).", "",
-            md_table(["study", "case", "error"], rows), ""]
+    expected = table["expected"] == "True" if "expected" in table else pd.Series(False, index=table.index)
+    rows = [[r.study, r.case, r.error] for r in table[~expected].itertuples(index=False)]
+    lines = []
+    if rows:
+        lines += ["## Failed cases", "",
+                  f"{len(rows)} cases failed; the sections above show what could be computed without them. "
+                  "Each failure's traceback is saved next to where its result would be (`*.failed.json`).", "",
+                  md_table(["study", "case", "error"], rows), ""]
+    if expected.any():
+        lines += ["## Expected stops", "",
+                  f"{int(expected.sum())} cases stopped with the error their case list expects (`expect_error`: a "
+                  "method that cannot pass a singular position, for example); their stop is their result, shown "
+                  "in their study's section. A case that finished instead would be listed above as failed.", ""]
+    return lines
