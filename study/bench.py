@@ -62,6 +62,7 @@ from study.compare import max_deviation
 from study.reference_data import tolerance
 from study.results import package_versions
 from study.simulate import simulate
+from study.solver.friction import DEFAULT_EPS
 
 OUT = Path(__file__).resolve().parents[1] / "reports" / "benchmarks"
 REPEATS = 5
@@ -70,7 +71,7 @@ LONG_RUN_TOTAL = 15.0  # [s] CPU allowed for the repeats of one long run
 LEVELS = (1e-4, 1e-6, 1e-8)
 EXUDYN_LEVELS = (1e-4, 1e-6)  # levels the Exudyn step is refined for (1e-8: out of reach)
 OUTPUT_STEP = 0.01
-EPS = 1e-3
+EPS = DEFAULT_EPS  # the regularized friction's default width, the same on both engines
 SWEEP_BUDGET = 6.0  # [s] stop halving a step / tightening a tolerance once one run costs more
 EXUDYN_RUN_BUDGET = 150.0  # [s] largest predicted CPU of one order-2 refinement run of Exudyn (the
 # slider-crank's index-2 run to 1e-6 is predicted at ~40-65 s here, depending on the machine's load)

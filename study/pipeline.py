@@ -66,10 +66,10 @@ from study.integrity import atomic_write, data_rows, read_json, sha256_text, ver
 from study.params import REFERENCE_DIR, load_parameters
 from study.reference_data import tolerance
 from study.results import SimulationResult, package_versions
+from study.sources import source_files, source_hash
 
 CASES_DIR = REFERENCE_DIR / "cases"
 ENGINES = ("inhouse", "exudyn")
-PACKAGE_ROOT = Path(__file__).resolve().parent
 # Source that determines a case's result, per engine (folders or files under study/). The report,
 # the studies' summaries and the command line do not change a result and are left out.
 _COMMON_CODE = ("model", "solver", "mechanisms", "params.py", "results.py", "reference_data.py")
@@ -178,16 +178,9 @@ def _parameter_hash(mechanism: str, variant: str) -> str:
 @lru_cache(maxsize=None)
 def code_version(engine: str) -> str:
     """SHA-256 (16 hex) of the source files that compute a result of ``engine`` + numeric package versions."""
-    h = hashlib.sha256()
-    for rel in CODE_PATHS[engine]:
-        path = PACKAGE_ROOT / rel
-        files = sorted(path.rglob("*.py")) if path.is_dir() else [path] if path.exists() else []
-        for f in files:
-            h.update(str(f.relative_to(PACKAGE_ROOT)).encode())
-            h.update(f.read_bytes())
     versions = package_versions()
-    h.update(json.dumps({p: versions.get(p) for p in NUMERIC_PACKAGES[engine]}, sort_keys=True).encode())
-    return h.hexdigest()[:16]
+    numeric = json.dumps({p: versions.get(p) for p in NUMERIC_PACKAGES[engine]}, sort_keys=True)
+    return source_hash(source_files(*CODE_PATHS[engine]), extra=numeric)[:16]
 
 
 # --- case lists ----------------------------------------------------------------------------------

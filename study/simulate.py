@@ -14,6 +14,7 @@ from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
+from study.solver.friction import DEFAULT_EPS
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_metadata
 
@@ -61,7 +62,7 @@ def simulate(
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
     friction: str | None = None,
-    friction_eps: float = 1e-3,
+    friction_eps: float = DEFAULT_EPS,
     friction_sgn: str = "tanh",
     resistance_reading: str | None = None,
     backend: str = "reference",

@@ -56,6 +56,7 @@ from exudyn.itemInterface import (
 
 from study import mechanisms
 from study.results import SimulationResult, package_versions
+from study.solver.friction import DEFAULT_EPS  # noqa: F401  (re-exported: exudyn_models.DEFAULT_EPS)
 
 OVT = exu.OutputVariableType
 esym = exu.symbolic
@@ -74,10 +75,8 @@ SOLVERS = IMPLICIT_SOLVERS + EXPLICIT_SOLVERS
 #: 'none': friction and resistance left out (the frictionless reference model).
 FRICTION_MODES = ("regularized", "none")
 
-#: Default velocity scale of the tanh regularization of the friction sign [m/s]. 1 mm/s is below
-#: 1 % of the sliding speeds of the study's cases (slider-crank ~0.2-0.3 m/s, ram up to ~6 m/s), so
-#: the regularized force equals the Coulomb force (tanh >= 0.99) except within ~2.6 mm/s of a stop.
-DEFAULT_EPS = 1e-3
+#: Default velocity scale of the tanh regularization of the friction sign [m/s]: the in-house
+#: default, ``study.solver.friction.DEFAULT_EPS`` (imported above), so both engines agree.
 
 #: GeneralizedAlpha spectral radius at infinity (Exudyn's default; damps the index-3 oscillation
 #: of the multipliers while keeping second order).

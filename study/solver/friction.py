@@ -66,6 +66,12 @@ CONSISTENCY_RTOL = 1e-10
 # Readings of a contact's constant resistance R at rest -> the fraction of R in the static limit.
 RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 
+#: Default width eps [m/s] of a regularized friction sign (in-house 'regularized' and 'sign', whose
+#: apparent-stick band it also sets, and the Exudyn models' tanh(v/eps)). 1 mm/s is below 1 % of the
+#: sliding speeds of the study's cases (slider-crank ~0.2-0.3 m/s, ram up to ~6 m/s), so the
+#: regularized force equals the Coulomb force (tanh >= 0.99) except within ~2.6 mm/s of a stop.
+DEFAULT_EPS = 1e-3
+
 
 class PainleveError(RuntimeError):
     """No consistent, or more than one consistent, sign of the normal force (Painleve's paradox).
@@ -134,7 +140,7 @@ class RegularizedCoulomb:
     reported as 1 inside the band |v_t| <= eps (apparent stick: the law has no true stick).
     """
 
-    eps: float = 1e-3
+    eps: float = DEFAULT_EPS
     sgn: str = "tanh"
     name: str = "regularized"
     switched: bool = False
@@ -164,7 +170,7 @@ class PlainSign:
     ``eps`` only defines the reported apparent stick, |v_t| <= eps.
     """
 
-    eps: float = 1e-3
+    eps: float = DEFAULT_EPS
     name: str = "sign"
     switched: bool = False
 
@@ -185,7 +191,7 @@ class PlainSign:
 FRICTION_TREATMENTS = {"exact": ExactCoulomb, "regularized": RegularizedCoulomb, "sign": PlainSign}
 
 
-def make_friction(name: str, eps: float = 1e-3, sgn: str = "tanh", resistance_reading: str = "holds"):
+def make_friction(name: str, eps: float = DEFAULT_EPS, sgn: str = "tanh", resistance_reading: str = "holds"):
     """A friction treatment by name: 'exact' (resistance_reading), 'regularized' (eps, sgn) or 'sign'
     (eps: apparent stick). ``resistance_reading`` matters only for 'exact', the one with a static limit."""
     if name not in FRICTION_TREATMENTS:
