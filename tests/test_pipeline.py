@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 
 from study import pipeline as pl
+from study.pipeline import execute
+from study.results import SimulationResult
 
 from tiny_cases import tiny  # noqa: F401  (a pytest fixture)
 
@@ -176,7 +178,7 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     assert 1 <= len(saved) < 7, f"interruption came too late to test resuming ({len(saved)} saved)"
     assert not list(runs.glob("*.tmp")), "a temporary file was left behind"
     for path in saved:  # every saved result is complete
-        pl.SimulationResult.load(path)
+        SimulationResult.load(path)
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert f"({len(saved)} cached)" in done.stderr and f"{7 - len(saved)}/{7 - len(saved)} done" in done.stderr
@@ -239,8 +241,8 @@ def test_skipped_summary_removes_its_stale_tables(tiny, tmp_path):
 
 def test_result_from_other_code_is_refused(tiny, tmp_path, monkeypatch):
     """A worker whose code differs (e.g. a stale Dask worker) must not save under this process's key."""
-    real = pl._run_case_timed
-    monkeypatch.setattr(pl, "_run_case_timed", lambda case: (*real(case)[:2], "0000000000000000"))
+    real = execute._run_case_timed
+    monkeypatch.setattr(execute, "_run_case_timed", lambda case: (*real(case)[:2], "0000000000000000"))
     cases = pl.load_case_list(tiny / "sliding_mode.toml").cases[:1]
     store = pl.Store(tmp_path / "runs")
     out = pl.run_cases(cases, store, pl.InlineExecutor())
