@@ -16,7 +16,7 @@ from study.model.compile import cache_dir
 from study.sources import source_files, source_hash
 
 # Every module of the fast path, and the reference modules whose constants its kernels compile in.
-_SOURCES = ("fast", "solver/friction.py", "solver/integrate.py")
+_SOURCES = ("fast", "solver/friction", "solver/integrate.py")
 SOURCE_HASH = source_hash(source_files(*_SOURCES))[:12]
 
 
