@@ -5,6 +5,9 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     [study]
     description = "what the study asks"
     summary = "study.studies.sliding_mode"      # module with summarize(cases, load) -> {table: DataFrame}
+    section = "sliding_mode"                    # optional: its report section (study.report.sections.<name>)
+    section_order = 40                          # ... and that section's place in the report (a number;
+                                                # study.report.FIXED_SECTIONS places the others)
 
     [[group]]
     name = "reference"                          # readable, unique within the study
@@ -146,6 +149,8 @@ class CaseList:
     path: Path
     report: Mapping[str, Any] = field(default_factory=dict)   # the list's [report] table: its section's choices
     samples: tuple[tuple[Case, Case], ...] = ()   # (compiled case, its reference-path twin), see reference_sample
+    section: str | None = None           # its report section (a module of study.report.sections), if it has one
+    section_order: float | None = None   # that section's place in the report (smaller first)
 
     @property
     def all_cases(self) -> tuple[Case, ...]:
@@ -273,10 +278,20 @@ def load_case_list(path: Path) -> CaseList:
         group_cases = _expand_group(study, g, where)
         cases += group_cases
         samples += _samples(g, group_cases, where)
+    section, order = head.get("section"), head.get("section_order")
+    if section is not None and not (isinstance(section, str) and section.isidentifier()):
+        raise CaseListError(f"{path}: [study] section = {section!r} must be the name of a module of "
+                            f"study.report.sections")
+    if (section is None) != (order is None):
+        raise CaseListError(f"{path}: [study] 'section' and 'section_order' go together (got section = "
+                            f"{section!r}, section_order = {order!r})")
+    if order is not None and (isinstance(order, bool) or not isinstance(order, (int, float))):
+        raise CaseListError(f"{path}: [study] section_order = {order!r} must be a number (the section's place)")
     report = data.get("report", {})
     if not isinstance(report, dict):
         raise CaseListError(f"{path}: [report] must be a table (the report section's choices), got {report!r}")
-    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report, tuple(samples))
+    return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report, tuple(samples),
+                    section, None if order is None else float(order))
 
 
 def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:
