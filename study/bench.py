@@ -78,7 +78,7 @@ EXUDYN_RUN_BUDGET = 150.0  # [s] largest predicted CPU of one order-2 refinement
 MARGIN = 0.8  # aim the order-2 prediction at MARGIN * level
 REF_RTOL = 5e-15
 REF_CHECK_RTOLS = (1e-14, 2e-15)
-#: Exudyn's two configurations (study.exudyn_models.common.CONFIGURATIONS), as work-precision engines:
+#: Exudyn's two configurations (study.exudyn_models.settings.CONFIGURATIONS), as work-precision engines:
 #: 'tuned' is Exudyn as its documentation recommends for speed (symbolic user functions, plain constant
 #: loads, no numerical load Jacobian unless a Python load needs it, one Jacobian per step); 'python'
 #: evaluates every load law in a Python user function with full Newton (the study's earlier setting).
