@@ -65,7 +65,9 @@ import numpy as np
 import sympy as sp
 
 from study import mechanisms
-from study.exudyn_models import building, settings, solve
+import study.exudyn_models.building as building
+import study.exudyn_models.settings as settings
+import study.exudyn_models.solve as solve
 from study.exudyn_models.building import OVT, BodyState, Model
 from study.exudyn_models.guards import GuideFriction, ReactionGuard
 from study.model.coordinates import poses
