@@ -271,3 +271,44 @@ sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:fric
     _write(tmp_path, path.read_text().replace("@reference_rtol", "@no_such_entry"))
     with pytest.raises(pl.CaseListError, match="'@no_such_entry' names no reference entry"):
         pl.load_case_list(path)
+
+
+# Modules a run imports that cannot change its result: error types, file checksums, the hasher itself.
+_KEY_EXEMPT = {"errors.py", "integrity.py", "sources.py"}
+
+
+def _imported_files(start: str) -> set:
+    """Files of every study module ``start`` imports, transitively (function-level imports included)."""
+    import ast
+
+    from study.sources import PACKAGE_ROOT
+
+    def file_of(name):
+        p = PACKAGE_ROOT.joinpath(*name.split(".")[1:])
+        return p / "__init__.py" if p.is_dir() else p.with_suffix(".py")
+
+    seen, todo = set(), [start]
+    while todo:
+        name = todo.pop()
+        if name in seen or name == "study" or not file_of(name).exists():  # 'study': the public re-exports
+            continue
+        seen.add(name)
+        for node in ast.walk(ast.parse(file_of(name).read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "study":
+                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                todo += [a.name for a in node.names if a.name.split(".")[0] == "study"]
+    return {file_of(m).resolve() for m in seen}
+
+
+@pytest.mark.parametrize("engine, start", [("inhouse", "study.simulate"), ("exudyn", "study.exudyn_models")])
+def test_case_key_covers_every_module_a_run_imports(engine, start):
+    """A case's key hashes the source of every module its run imports (e.g. the run helpers in
+    study/solver/run.py and assemble.py, shared by both in-house backends), so editing one reruns the case."""
+    from study.sources import PACKAGE_ROOT, source_files
+
+    covered = {p.resolve() for p in source_files(*pl.CODE_PATHS[engine])}
+    missing = sorted(str(p.relative_to(PACKAGE_ROOT)) for p in _imported_files(start) - covered)
+    assert [m for m in missing if m not in _KEY_EXEMPT] == []
+    assert {"solver/run.py", "solver/assemble.py", "solver/friction/contact.py"} <= {
+        str(p.relative_to(PACKAGE_ROOT)) for p in covered}
