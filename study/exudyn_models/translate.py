@@ -1,7 +1,9 @@
 """The Exudyn model of any joint-level description (:class:`study.model.joints.Description`).
 
 No mechanism is named here: bodies, joints, loads, friction and the result mapping are all read from
-the description returned by :func:`study.mechanisms.description`.
+the description returned by :func:`study.mechanisms.description`. One concept, the translation of a
+description into an Exudyn model and back into a result, hence its length; the run settings, model
+building blocks, reaction guards and solving it uses are in the sibling modules.
 
 Model
 -----
