@@ -62,6 +62,7 @@ from study.compare import max_deviation
 from study.reference_data import tolerance
 from study.results import package_versions
 from study.simulate import simulate
+from study.solver.friction import DEFAULT_EPS
 
 OUT = Path(__file__).resolve().parents[1] / "reports" / "benchmarks"
 REPEATS = 5
@@ -70,14 +71,14 @@ LONG_RUN_TOTAL = 15.0  # [s] CPU allowed for the repeats of one long run
 LEVELS = (1e-4, 1e-6, 1e-8)
 EXUDYN_LEVELS = (1e-4, 1e-6)  # levels the Exudyn step is refined for (1e-8: out of reach)
 OUTPUT_STEP = 0.01
-EPS = 1e-3
+EPS = DEFAULT_EPS  # the regularized friction's default width, the same on both engines
 SWEEP_BUDGET = 6.0  # [s] stop halving a step / tightening a tolerance once one run costs more
 EXUDYN_RUN_BUDGET = 150.0  # [s] largest predicted CPU of one order-2 refinement run of Exudyn (the
 # slider-crank's index-2 run to 1e-6 is predicted at ~40-65 s here, depending on the machine's load)
 MARGIN = 0.8  # aim the order-2 prediction at MARGIN * level
 REF_RTOL = 5e-15
 REF_CHECK_RTOLS = (1e-14, 2e-15)
-#: Exudyn's two configurations (study.exudyn_models.common.CONFIGURATIONS), as work-precision engines:
+#: Exudyn's two configurations (study.exudyn_models.settings.CONFIGURATIONS), as work-precision engines:
 #: 'tuned' is Exudyn as its documentation recommends for speed (symbolic user functions, plain constant
 #: loads, no numerical load Jacobian unless a Python load needs it, one Jacobian per step); 'python'
 #: evaluates every load law in a Python user function with full Newton (the study's earlier setting).

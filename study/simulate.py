@@ -10,13 +10,15 @@ import numpy as np
 from study.model.eom import EquationsOfMotion, as_state
 from study.errors import RunTooLargeError
 from study.reference_data import tolerance
-from study.results import SimulationResult, package_versions
+from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
+from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
-from study.solver.dynamics import Dynamics
-from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
+from study.solver.friction import DEFAULT_EPS
 from study.solver.integrate import INTEGRATORS, integrate
-from study.solver.stabilization import make_stabilization
+from study.solver.run import build_dynamics, output_times, run_metadata
+
+__all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "build_dynamics", "check_run_size", "resolve", "simulate"]
 
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
@@ -60,7 +62,7 @@ def simulate(
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
     friction: str | None = None,
-    friction_eps: float = 1e-3,
+    friction_eps: float = DEFAULT_EPS,
     friction_sgn: str = "tanh",
     resistance_reading: str | None = None,
     backend: str = "reference",
@@ -228,26 +230,6 @@ def simulate(
     return result
 
 
-def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, method: str,
-                   acceleration_solver: str, friction: str | None, friction_eps: float, friction_sgn: str,
-                   resistance_reading: str = "holds", **method_options) -> tuple[Dynamics, np.ndarray, StickSlipSwitching | None]:
-    """A run's dynamics (with friction: a FrictionDynamics), its initial state y0 and its stick/slip rule.
-
-    y0 = [q0, qd0, 0 for the work of every applied load (and of every contact's friction)].
-    """
-    stabilization = make_stabilization(method, **method_options)
-    law = None if friction is None else make_friction(friction, eps=friction_eps, sgn=friction_sgn,
-                                                      resistance_reading=resistance_reading)
-    work_names = tuple(eom.applied_forces(0.0, q0, qd0))
-    solver = make_acceleration_solver(acceleration_solver)
-    if law is None:
-        dyn = Dynamics(eom, solver, stabilization, work_names)
-        return dyn, np.concatenate([q0, qd0, np.zeros(len(work_names))]), None
-    n_load = len(np.atleast_1d(eom.indicators(0.0, q0, qd0))) if eom.indicators is not None else 0
-    dyn = FrictionDynamics(eom, solver, stabilization, work_names, law=law, n_load_modes=n_load)
-    y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
-    return dyn, y0, StickSlipSwitching(dyn) if law.switched else None
-
 
 def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_end: float, integrator: str,
                    step: float | None, output_step: float, friction: str | None, max_evaluations: float,
@@ -292,75 +274,3 @@ def _duration(seconds: float) -> str:
         if seconds >= size:
             return f"{seconds / size:.3g} {unit}"
     return f"{seconds:.3g} s"
-
-
-def output_times(t_end: float, output_step: float) -> np.ndarray:
-    """The sampling grid of a run: k * output_step up to t_end, plus t_end itself."""
-    n_out = int(np.floor(t_end / output_step + 1e-9))
-    t_out = np.append(np.arange(n_out + 1) * output_step, [] if np.isclose(n_out * output_step, t_end) else [t_end])
-    t_out[-1] = min(t_out[-1], t_end)
-    return t_out
-
-
-def run_metadata(eom: EquationsOfMotion, ps, *, integrator: str, rtol: float, atol: float, step: float | None,
-                 acceleration_solver: str, output_step: float, t_end: float, stabilization, law) -> dict:
-    """The settings of an in-house run, as stored in ``SimulationResult.meta`` (both backends)."""
-    return {
-        "engine": "in-house",
-        "mechanism": ps.mechanism if ps else eom.name,
-        "variant": ps.variant if ps else None,
-        "parameter_hash": ps.sha256 if ps else eom.parameter_hash,
-        "integrator": integrator,
-        "rtol": rtol if integrator != "RK4" else None,
-        "atol": atol if integrator != "RK4" else None,
-        "step": step,
-        "acceleration_solver": acceleration_solver,
-        "output_step": output_step,
-        "t_end": float(t_end),
-        **stabilization.settings(),
-        **(law.settings() if law is not None else {"friction": None}),
-        "versions": package_versions(),
-    }
-
-
-def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) -> SimulationResult:
-    """Post-process samples: accelerations, multipliers, residuals and energies at every sample.
-
-    With friction (a FrictionDynamics) also the contacts' normal and tangential forces, stick flags
-    and the work of each contact's tangential force.
-    """
-    eom = dyn.eom
-    m, r = eom.n_coordinates, eom.n_constraints
-    n = len(t)
-    qdd, lam = np.zeros((n, m)), np.zeros((n, r))
-    phi, phidot = np.zeros((n, r)), np.zeros((n, r))
-    kinetic, potential = np.zeros(n), np.zeros(n)
-    with_friction = isinstance(dyn, FrictionDynamics)
-    nc = dyn.n_contacts if with_friction else 0
-    normal, tangential, stick = np.zeros((n, nc)), np.zeros((n, nc)), np.zeros((n, nc))
-    for k in range(n):
-        q, qd = y[k, :m], y[k, m:2 * m]
-        if with_friction:
-            sol = dyn.contact_solution(t[k], q, qd, modes[k])
-            qdd[k], lam[k] = sol.qdd, sol.lam
-            normal[k], tangential[k], stick[k] = sol.normal, sol.friction, dyn.stick_flags(sol)
-        else:
-            qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
-        phi[k] = eom.phi(q)
-        phidot[k] = eom.phi_q(q) @ qd
-        kinetic[k] = eom.kinetic_energy(q, qd)
-        potential[k] = eom.potential_energy(q) if eom.potential_energy else 0.0
-    energies = {"kinetic": kinetic, "potential": potential}
-    for i, name in enumerate(dyn.work_names):
-        energies[f"work_{name}"] = y[:, 2 * m + i]
-    forces = {}
-    for j, name in enumerate(dyn.contact_names if with_friction else ()):
-        energies[f"work_friction_{name}"] = y[:, 2 * m + len(dyn.work_names) + j]
-        forces[f"normal_{name}"] = normal[:, j]
-        forces[f"friction_{name}"] = tangential[:, j]
-        forces[f"stick_{name}"] = stick[:, j]
-    meta = {"coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
-            "has_potential": eom.potential_energy is not None}
-    result = SimulationResult(t, y[:, :m], y[:, m:2 * m], qdd, lam, phi, phidot, energies, forces, {}, meta)
-    result.check_finite()  # every saved sample: a NaN is a failed run, never a result
-    return result

@@ -1,7 +1,7 @@
 """Coulomb friction in sliding joints (study.solver.friction, SPEC sec. 1, paper 000).
 
 Independent checks: hand-solved block motions (stick time v0 / (mu g), release under a ramp push,
-reversal), 000's own corrected method for the slider-crank (study.studies.slider_crank.paper_method),
+reversal), 000's own corrected method for the slider-crank (study.studies.slider_crank_paper.paper_method),
 a direct non-symmetric saddle-point solve, and Painleve's rod.
 """
 
@@ -16,7 +16,7 @@ from study.reference_data import tolerance
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.friction import FrictionDynamics, FrictionLawError, PainleveError, make_friction
 from study.solver.stabilization import make_stabilization
-from study.studies.slider_crank import holding_forces, paper_method
+from study.studies.slider_crank_paper import holding_forces, paper_method
 
 
 def tol(key):

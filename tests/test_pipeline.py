@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 
 from study import pipeline as pl
+from study.pipeline import execute
+from study.results import SimulationResult
 
 from tiny_cases import tiny  # noqa: F401  (a pytest fixture)
 
@@ -224,7 +226,7 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     assert 1 <= len(saved) < 7, f"interruption came too late to test resuming ({len(saved)} saved)"
     assert not list(runs.glob("*.tmp")), "a temporary file was left behind"
     for path in saved:  # every saved result is complete
-        pl.SimulationResult.load(path)
+        SimulationResult.load(path)
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert f"({len(saved)} cached)" in done.stderr and f"{7 - len(saved)}/{7 - len(saved)} done" in done.stderr
@@ -287,8 +289,8 @@ def test_skipped_summary_removes_its_stale_tables(tiny, tmp_path):
 
 def test_result_from_other_code_is_refused(tiny, tmp_path, monkeypatch):
     """A worker whose code differs (e.g. a stale Dask worker) must not save under this process's key."""
-    real = pl._run_case_timed
-    monkeypatch.setattr(pl, "_run_case_timed", lambda case: (*real(case)[:2], "0000000000000000"))
+    real = execute._run_case_timed
+    monkeypatch.setattr(execute, "_run_case_timed", lambda case: (*real(case)[:2], "0000000000000000"))
     cases = pl.load_case_list(tiny / "sliding_mode.toml").cases[:1]
     store = pl.Store(tmp_path / "runs")
     out = pl.run_cases(cases, store, pl.InlineExecutor())
@@ -317,3 +319,44 @@ sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:fric
     _write(tmp_path, path.read_text().replace("@reference_rtol", "@no_such_entry"))
     with pytest.raises(pl.CaseListError, match="'@no_such_entry' names no reference entry"):
         pl.load_case_list(path)
+
+
+# Modules a run imports that cannot change its result: error types, file checksums, the hasher itself.
+_KEY_EXEMPT = {"errors.py", "integrity.py", "sources.py"}
+
+
+def _imported_files(start: str) -> set:
+    """Files of every study module ``start`` imports, transitively (function-level imports included)."""
+    import ast
+
+    from study.sources import PACKAGE_ROOT
+
+    def file_of(name):
+        p = PACKAGE_ROOT.joinpath(*name.split(".")[1:])
+        return p / "__init__.py" if p.is_dir() else p.with_suffix(".py")
+
+    seen, todo = set(), [start]
+    while todo:
+        name = todo.pop()
+        if name in seen or name == "study" or not file_of(name).exists():  # 'study': the public re-exports
+            continue
+        seen.add(name)
+        for node in ast.walk(ast.parse(file_of(name).read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "study":
+                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                todo += [a.name for a in node.names if a.name.split(".")[0] == "study"]
+    return {file_of(m).resolve() for m in seen}
+
+
+@pytest.mark.parametrize("engine, start", [("inhouse", "study.simulate"), ("exudyn", "study.exudyn_models")])
+def test_case_key_covers_every_module_a_run_imports(engine, start):
+    """A case's key hashes the source of every module its run imports (e.g. the run helpers in
+    study/solver/run.py and assemble.py, shared by both in-house backends), so editing one reruns the case."""
+    from study.sources import PACKAGE_ROOT, source_files
+
+    covered = {p.resolve() for p in source_files(*pl.CODE_PATHS[engine])}
+    missing = sorted(str(p.relative_to(PACKAGE_ROOT)) for p in _imported_files(start) - covered)
+    assert [m for m in missing if m not in _KEY_EXEMPT] == []
+    assert {"solver/run.py", "solver/assemble.py", "solver/friction/contact.py"} <= {
+        str(p.relative_to(PACKAGE_ROOT)) for p in covered}

@@ -174,3 +174,25 @@ def test_claims_verdicts_follow_the_tables(tmp_path, saved):
     assert "| 000 | the printed initial state satisfies the constraints | fails | max\\|Φ\\| at the printed q(0) = 5.204 m" in claims
     assert "| 001 | the printed initial state satisfies the constraints | holds |" in claims
     assert claims.count("not checked") == 5  # friction and the four sliding-mode claims have no table
+
+
+def test_case_lists_name_their_report_sections(tmp_path):
+    """The report's sections come from the case lists ([study] section, section_order) and FIXED_SECTIONS;
+    the study's own case lists give the order the report had when it kept a list of studies."""
+    from study.report import report_sections
+
+    assert report_sections(pl.load_case_lists()) == (
+        "claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
+        "work_precision", "benchmarks", "beyond_papers")
+    folder = tmp_path / "cases"
+    folder.mkdir()
+    (folder / "a.toml").write_text(TINY)
+    (folder / "b.toml").write_text(TINY.replace("section_order = 40", "section_order = 45"))
+    with pytest.raises(pl.CaseListError, match="section_order = 45"):
+        report_sections(pl.load_case_lists(folder))
+    (folder / "b.toml").write_text(TINY.replace('section = "sliding_mode"', 'section = "no_such_section"'))
+    with pytest.raises(pl.CaseListError, match="no module"):
+        report_sections(pl.load_case_lists(folder))
+    (folder / "b.toml").write_text(TINY.replace("section_order = 40\n", ""))
+    with pytest.raises(pl.CaseListError, match="go together"):
+        pl.load_case_lists(folder)

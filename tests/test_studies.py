@@ -22,7 +22,7 @@ from study.pipeline import (CASES_DIR, InlineExecutor, Store, find, find_one, lo
                             write_tables)
 from study.reference_data import tolerance
 from study.report.context import ReportContext
-from study.studies import sensitivity, slider_crank, work_precision
+from study.studies import sensitivity, slider_crank, slider_crank_paper, work_precision
 
 # study -> (number of cases, number of distinct keys, cases per group)
 EXPECTED = {
@@ -176,14 +176,14 @@ def test_breakaway_torque_is_where_the_holding_force_reaches_the_static_limit():
     v = load_parameters("slider_crank", "seed").values
     q1 = math.pi / 6
     q = np.array([q1, math.asin(v.l1 * math.sin(q1) / v.l2) - q1])  # the consistent branch
-    b = slider_crank.breakaway_torque(v, q)
+    b = slider_crank_paper.breakaway_torque(v, q)
     assert b["breakaway_M"] > v.M  # 000's drive cannot move it
-    at = slider_crank.holding_forces(dataclasses.replace(v, M=b["breakaway_M"]), q)
+    at = slider_crank_paper.holding_forces(dataclasses.replace(v, M=b["breakaway_M"]), q)
     limit = v.F + v.mu * abs(b["breakaway_normal"])
     assert abs(at["f_required"] - b["breakaway_f"]) <= tolerance("round_off") * limit
     assert abs(abs(b["breakaway_f"]) - limit) <= tolerance("round_off") * limit
     th = q.sum()
     for factor, holds in ((0.99, True), (1.01, False)):
-        f = slider_crank.holding_forces(dataclasses.replace(v, M=factor * b["breakaway_M"]), q)["f_required"]
+        f = slider_crank_paper.holding_forces(dataclasses.replace(v, M=factor * b["breakaway_M"]), q)["f_required"]
         normal = v.m3 * v.g + (v.m2 * v.g * v.c2 * math.cos(th) + v.l2 * math.sin(th) * f) / (v.l2 * math.cos(th))
         assert (abs(f) <= v.F + v.mu * abs(normal)) is holds

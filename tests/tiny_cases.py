@@ -8,6 +8,8 @@ TINY = """
 [study]
 description = "tiny"
 summary = "study.studies.sliding_mode"
+section = "sliding_mode"
+section_order = 40
 
 [[group]]
 name = "reference"

@@ -10,14 +10,20 @@ Exudyn's own kinematics.
 
 Modules
 -------
-common
-    Solver settings, argument checks, model building blocks, sensors -> arrays, the reaction-force
-    guard, the regularized guide friction, CPU timing.
+settings
+    Solvers and configurations by name, argument checks, SimulationSettings (and the verified Exudyn
+    behaviour the models rely on).
+building
+    Model building blocks: planar rigid bodies, joints, loads, sensors read back as arrays.
+guards
+    The guarded joint-reaction reading in a user function, and the regularized guide friction.
+solve
+    Running a built model (seeding, SolveDynamic, CPU timing) and post-processing into a SimulationResult.
 translate
     Description -> Exudyn model -> SimulationResult, and the initial accelerations / multipliers.
 """
 
-from study.exudyn_models.common import (
+from study.exudyn_models.settings import (
     CONFIGURATIONS,
     DEFAULT_EPS,
     EXPLICIT_SOLVERS,

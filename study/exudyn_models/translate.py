@@ -1,7 +1,9 @@
 """The Exudyn model of any joint-level description (:class:`study.model.joints.Description`).
 
 No mechanism is named here: bodies, joints, loads, friction and the result mapping are all read from
-the description returned by :func:`study.mechanisms.description`.
+the description returned by :func:`study.mechanisms.description`. One concept, the translation of a
+description into an Exudyn model and back into a result, hence its length; the run settings, model
+building blocks, reaction guards and solving it uses are in the sibling modules.
 
 Model
 -----
@@ -29,15 +31,15 @@ Model
   symbolic user function (``exudyn.symbolic``, evaluated in C++, no Python per call): a point force
   reading only its point's x, y, vx, vy as ObjectConnectorCartesianSpringDamper from the ground
   origin, a torque reading only its body's angle and rate as ObjectConnectorCoordinateSpringDamper on
-  the rotation coordinate (see common.Model.point_law / angle_law); other laws and the friction (it
+  the rotation coordinate (see building.Model.point_law / angle_law); other laws and the friction (it
   reads a joint reaction, which only Python can) stay Python user functions; Newton reuses one
   Jacobian per step. tests/test_exudyn_tuned.py checks both configurations give the same answers.
 * Potentials (springs): user-function torques / forces = minus the gradient of the energy with
   respect to the angle and point-position inputs; their energy is part of the result's potential.
 * Friction: a prismatic joint with :class:`~study.model.joints.Friction` data whose kinetic
   coefficient or resistance is > 0 (guide fixed in ground) gets the regularized Coulomb law of
-  :class:`~study.exudyn_models.common.GuideFriction` along the guide's axis, with N read from the
-  joint through a :class:`~study.exudyn_models.common.ReactionGuard`; ``friction='none'`` leaves it out.
+  :class:`~study.exudyn_models.guards.GuideFriction` along the guide's axis, with N read from the
+  joint through a :class:`~study.exudyn_models.guards.ReactionGuard`; ``friction='none'`` leaves it out.
 
 Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
 ---------------------------------------------------------------------------
@@ -65,8 +67,11 @@ import numpy as np
 import sympy as sp
 
 from study import mechanisms
-from study.exudyn_models import common
-from study.exudyn_models.common import OVT, BodyState, GuideFriction, Model, ReactionGuard
+import study.exudyn_models.building as building
+import study.exudyn_models.settings as settings
+import study.exudyn_models.solve as solve
+from study.exudyn_models.building import OVT, BodyState, Model
+from study.exudyn_models.guards import GuideFriction, ReactionGuard
 from study.model.coordinates import poses
 from study.model.joints import GROUND, Description, Prismatic, Revolute
 from study.params import ParameterSet
@@ -147,9 +152,9 @@ def _rotation(a) -> Array:
 # load laws: lambdified once, evaluated from Exudyn's kinematics (live) or from its body series
 # --------------------------------------------------------------------------------------------
 #: sympy function names -> Exudyn symbolic functions, for laws recorded as symbolic user functions
-_ESYM = {name: getattr(common.esym, name) for name in ("sin", "cos", "tan", "tanh", "sinh", "cosh", "exp", "log",
+_ESYM = {name: getattr(building.esym, name) for name in ("sin", "cos", "tan", "tanh", "sinh", "cosh", "exp", "log",
                                                         "sqrt", "atan", "atan2", "asin", "acos", "sign")}
-_ESYM["Abs"] = common.esym.abs
+_ESYM["Abs"] = building.esym.abs
 
 
 class Law:
@@ -180,7 +185,7 @@ class Law:
         """The law as a function of Exudyn symbolic values (``exudyn.symbolic``), for recording a symbolic
         user function: same arguments as ``__call__``; a mode is IfThenElse(switch >= 0, 1, -1), the
         same rule as the Python evaluation."""
-        esym = common.esym
+        esym = building.esym
         f = sp.lambdify(self._args, self.exprs, modules=[_ESYM])
         switch_f = [sp.lambdify(self._args[:1 + len(self.inputs)], e, modules=[_ESYM]) for e in self._switch_exprs]
 
@@ -261,7 +266,7 @@ def loads_jacobian(d: Description) -> int:
     """``computeLoadsJacobian``: 2 when the description has an active friction contact, else 0.
 
     The regularized friction and resistance tanh(v/eps) need their derivative in the Newton matrix
-    (without it Newton diverges, see common.simulation_settings); the frictionless runs of such a
+    (without it Newton diverges, see settings.simulation_settings); the frictionless runs of such a
     mechanism (``friction='none'``) keep the same setting, so the two differ only by the friction
     itself. Without friction the other laws do not need it: for the study's steepest smooth law (a tanh-ramped force)
     the Newton iteration counts with and without the load Jacobian agree within 0.5 % (20 s,
@@ -322,7 +327,7 @@ class Built:
         return self.kin.pinv @ alpha, self._lam(outputs, eom.constraint_names)
 
     # --- result ----------------------------------------------------------------------------------
-    def result(self, eom, grid: common.RunGrid, solver: str, stats: dict) -> SimulationResult:
+    def result(self, eom, grid: settings.RunGrid, solver: str, stats: dict) -> SimulationResult:
         d, subs = self.d, self.kin.subs
         t = grid.h * np.arange(grid.n_steps + 1)
         pos, vel, acc, disp = {}, {}, {}, {}
@@ -359,7 +364,7 @@ class Built:
                 continue
             fric = self.frictions_by_contact.get(j.name)
             if fric is not None:
-                hist = common.friction_history(fric, grid, stats)
+                hist = solve.friction_history(fric, grid, stats)
                 coulomb, resistance, v_t = hist[:, 2], hist[:, 3], hist[:, 1]
             else:
                 coulomb = resistance = v_t = np.zeros_like(t)
@@ -378,7 +383,7 @@ class Built:
         bodies = {b: (float(body.mass.xreplace(subs)), float(body.inertia.xreplace(subs)))
                   for b, body in d.bodies.items()}
         g = float(d.gravity_g.xreplace(subs)) if d.gravity_g is not None else 0.0
-        kinetic, potential = common.body_energies(bodies, pos, vel, g)
+        kinetic, potential = solve.body_energies(bodies, pos, vel, g)
         for law in self.potentials.values():
             potential = potential + _law_series(law, t, _series_inputs(law, d, subs, pos, vel))[:, 0]
 
@@ -400,7 +405,7 @@ class Built:
         if active:
             meta["work_friction"] = "work_friction_<c>: Coulomb plus resistance (the whole tangential guide force)"
         friction = self.friction if active else "none (no friction contact with mu_k > 0 or resistance > 0)"
-        return common.assemble_result(eom, self.ps, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
+        return solve.assemble_result(eom, self.ps, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
                                       lam=lam, kinetic=kinetic, potential=potential, works=works, forces=forces,
                                       stats=stats, meta=meta)
 
@@ -442,11 +447,11 @@ class Built:
         return out
 
 
-def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = common.DEFAULT_EPS,
+def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
           configuration: str = "python") -> Built:
     """Assemble the Exudyn model of ``ps``'s description at the state (q0, qd0) (relative coordinates).
 
-    ``configuration`` (common.CONFIGURATIONS): 'python' evaluates every state-dependent law in a
+    ``configuration`` (settings.CONFIGURATIONS): 'python' evaluates every state-dependent law in a
     Python load user function; 'tuned' records it as an Exudyn symbolic user function where the law's
     inputs are those of the element carrying it (:func:`_symbolic_law`), else keeps the Python one, and
     leaves the numerical load Jacobian off unless a Python load remains that needs it (the friction).
@@ -604,7 +609,7 @@ def _user_function(law: Law, read, torque: bool):
 
 
 def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
-        friction: str = "regularized", eps: float = common.DEFAULT_EPS,
+        friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
         configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
     """Simulate a parameter set's mechanism in Exudyn from the in-house consistent initial state.
 
@@ -615,28 +620,28 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
         End time [s], a whole number of steps.
     h : float
         Fixed step [s].
-    solver : {'index3', 'index2'} (or an explicit name, which Exudyn refuses; see common.SOLVERS)
+    solver : {'index3', 'index2'} (or an explicit name, which Exudyn refuses; see settings.SOLVERS)
     output_step : float, optional
         Sampling of the result, a whole multiple of h; default every step.
     friction : {'regularized', 'none'}
         'none' leaves out the Coulomb friction and resistance of every contact.
     eps : float
-        Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (common.DEFAULT_EPS).
+        Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (settings.DEFAULT_EPS).
     configuration : {'python', 'tuned'}
-        How Exudyn evaluates the load laws and iterates (common.CONFIGURATIONS); both solve the same
+        How Exudyn evaluates the load laws and iterates (settings.CONFIGURATIONS); both solve the same
         model, 'tuned' as Exudyn recommends for speed.
     ignore_singular : bool
-        Exudyn's option for redundant constraints / singular poses (common.simulation_settings).
+        Exudyn's option for redundant constraints / singular poses (settings.simulation_settings).
 
     Returns
     -------
     SimulationResult (see the module docstring for the mapping of every quantity)
     """
-    return common.run_model(build, ps, t_end, h, solver, output_step, friction, eps, configuration, ignore_singular)
+    return solve.run_model(build, ps, t_end, h, solver, output_step, friction, eps, configuration, ignore_singular)
 
 
 def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized",
-                          eps: float = common.DEFAULT_EPS) -> tuple[Array, Array]:
+                          eps: float = settings.DEFAULT_EPS) -> tuple[Array, Array]:
     """Exudyn's accelerations and multipliers at a state (relative coordinates), from its solver
     initialization alone: the initial-acceleration solve SolveDynamic performs at t = 0 (with the seeded
     normal force if friction is on), mapped to the in-house coordinates and multiplier convention.
@@ -646,4 +651,4 @@ def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized"
     qdd : (m,) array
     lam : (r,) array, in ``eom.constraint_names`` order
     """
-    return common.initial_accelerations(build, ps, q, qd, friction, eps)
+    return solve.initial_accelerations(build, ps, q, qd, friction, eps)

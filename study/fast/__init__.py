@@ -18,7 +18,8 @@ steppers
 loop
     The compiled integration loop: step control, located switches, projection, sampling.
 frontend
-    Python side: option checks (ValueError for what is not compiled), packing, events, result assembly.
+    Python side: option checks (ValueError for what is not compiled), packing, events; the run's setup
+    and result assembly are the reference's (``study.solver.run``, ``study.solver.assemble``).
 """
 
 from study.fast import cache as _cache  # noqa: F401  (sets numba's cache folder before any kernel is defined)

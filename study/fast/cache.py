@@ -9,27 +9,15 @@ is otherwise paid once per machine. An explicit ``NUMBA_CACHE_DIR`` in the envir
 
 from __future__ import annotations
 
-import hashlib
 import os
 from pathlib import Path
 
 from study.model.compile import cache_dir
+from study.sources import source_files, source_hash
 
-_HERE = Path(__file__).resolve().parent
 # Every module of the fast path, and the reference modules whose constants its kernels compile in.
-_SOURCES = sorted(_HERE.glob("*.py")) + [_HERE.parent / "solver" / "friction.py", _HERE.parent / "solver" / "integrate.py"]
-
-
-def source_hash() -> str:
-    """Hash of the sources the compiled kernels depend on (see ``_SOURCES``)."""
-    h = hashlib.sha256()
-    for path in _SOURCES:
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()[:12]
-
-
-SOURCE_HASH = source_hash()
+_SOURCES = ("fast", "solver/friction", "solver/integrate.py")
+SOURCE_HASH = source_hash(source_files(*_SOURCES))[:12]
 
 
 def generated_dir() -> Path:

@@ -8,7 +8,7 @@ error control) and RK4. Anything else raises a ValueError naming the option: the
 fallback. Switches are located in the compiled loop; the new mode is set here (loads: the crossing
 entry flips; exact friction: ``study.solver.friction.StickSlipSwitching.on_event``, the reference
 rule), then the next segment starts. Samples are post-processed by the reference
-``assemble_result``, so a result has exactly the reference's fields.
+``study.solver.assemble.assemble_result``, so a result has exactly the reference's fields.
 """
 
 from __future__ import annotations
@@ -27,10 +27,11 @@ from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
 from study.results import SimulationResult
-from study.simulate import assemble_result, build_dynamics, output_times, run_metadata
+from study.solver.assemble import assemble_result
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
+from study.solver.run import build_dynamics, output_times, run_metadata
 from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
@@ -133,7 +134,7 @@ class Setup:
 
 def setup(eom: EquationsOfMotion, ps: ParameterSet, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
-    """Build the reference dynamics (``study.simulate.build_dynamics``) and the compiled option arrays."""
+    """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays."""
     model = compiled_model(ps)
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,

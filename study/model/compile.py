@@ -24,6 +24,7 @@ from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
 from study.model.eom import EquationsOfMotion, SlidingContact
+from study.sources import source_files, source_hash
 
 def cache_dir() -> Path:
     """Root of the on-disk cache: $STUDY_CACHE_DIR, else ``.cache`` in the repository."""
@@ -33,11 +34,7 @@ def cache_dir() -> Path:
 
 def _generator_source() -> str:
     """The source of the derivation and code generation (study/model/*.py) and sympy's version."""
-    h = hashlib.sha256(sp.__version__.encode())
-    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()
+    return source_hash(source_files("model"), extra=sp.__version__)
 
 
 def description_key(b: MechanismBuilder) -> str:

@@ -1,8 +1,9 @@
 """The automated report, built from saved results only: it never runs a simulation.
 
 :func:`build_report` gives every section (``study/report/sections/<name>.py``, in the order of
-:data:`SECTIONS`) a :class:`~study.report.context.ReportContext` over the saved tables
-(``reports/tables``, ``reports/timing``) and the pipeline's saved runs, and writes
+:func:`report_sections`: the fixed ones and those the case lists name) a
+:class:`~study.report.context.ReportContext` over the saved tables (``reports/tables``,
+``reports/timing``) and the pipeline's saved runs, and writes
 
 - ``reports/figures/*.png`` and ``*.svg``;
 - ``reports/index.md``: the report, readable on a code host (figures numbered, formulas as ``$...$``);
@@ -21,23 +22,49 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.util
 import json
 import subprocess
 import time
 from pathlib import Path
+from typing import Iterable
 
 import pandas as pd
 
-from study.pipeline import CASES_DIR, PIPELINE_RECORD, Store, load_case_lists
+from study.pipeline import CASES_DIR, PIPELINE_RECORD, CaseList, CaseListError, Store, load_case_lists
 from study.report.context import ReportContext, default_render_workers
 from study.report.render import markdown_to_html, md_table, number_figures, png_data_uri
 from study.results import package_versions
 
-__all__ = ["SECTIONS", "build_report"]
+__all__ = ["FIXED_SECTIONS", "build_report", "report_sections"]
 
-# Sections in report order (modules of study.report.sections).
-SECTIONS = ("claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-            "work_precision", "benchmarks", "beyond_papers")
+# The sections that no case list names (modules of study.report.sections), with their place in the
+# report. Every other section is named by a case list ([study] section, section_order), so a new
+# study is a case list plus a section module.
+FIXED_SECTIONS = {"claims": 10.0, "initial": 20.0, "errata": 30.0, "benchmarks": 90.0}
+
+
+def report_sections(case_lists: Iterable[CaseList]) -> tuple[str, ...]:
+    """The report's sections in order: :data:`FIXED_SECTIONS` and every section a case list names.
+
+    Raises
+    ------
+    CaseListError
+        A section has two places (two case lists, or a case list and FIXED_SECTIONS, disagree), or
+        names no module of ``study.report.sections``.
+    """
+    place, named_by = dict(FIXED_SECTIONS), {name: "study.report.FIXED_SECTIONS" for name in FIXED_SECTIONS}
+    for cl in case_lists:
+        if cl.section is None:
+            continue
+        if cl.section in place and place[cl.section] != cl.section_order:
+            raise CaseListError(f"{cl.path.name}: [study] section {cl.section!r} at section_order = "
+                                f"{cl.section_order:g}, but {named_by[cl.section]} places it at {place[cl.section]:g}")
+        if importlib.util.find_spec(f"study.report.sections.{cl.section}") is None:
+            raise CaseListError(f"{cl.path.name}: [study] section = {cl.section!r}: no module "
+                                f"study/report/sections/{cl.section}.py")
+        place[cl.section], named_by[cl.section] = cl.section_order, cl.path.name
+    return tuple(sorted(place, key=lambda name: (place[name], name)))
 
 
 def _other_tables_section(tables_dir: Path, shown: set[str]) -> list[str]:
@@ -122,7 +149,7 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
              "The same content as one self-contained page is [`report.html`](report.html).", ""]
     stages = {}
     try:
-        for name in SECTIONS:
+        for name in report_sections(case_lists.values()):
             ts = time.perf_counter()
             lines += importlib.import_module(f"study.report.sections.{name}").section(ctx)
             stages[f"report:{name}"] = time.perf_counter() - ts

@@ -4,6 +4,7 @@ Each ``*_figure`` function takes data that is already loaded (:class:`study.resu
 objects, the study's tables) and returns a :class:`matplotlib.figure.Figure` built without pyplot,
 so no global backend or figure registry is touched; :func:`save_figure` writes it as PNG (Agg) and
 SVG. Output is deterministic: fixed style, fixed SVG id salt, no date in the metadata.
+One concept, drawing a figure from loaded data; the report's sections choose what to draw.
 """
 
 from __future__ import annotations

@@ -51,6 +51,7 @@ from study.params import load_parameters
 from study.pipeline import Case
 from study.reactions import joint_reactions
 from study.results import SimulationResult
+from study.solver.friction import DEFAULT_EPS
 
 Array = np.ndarray
 
@@ -156,10 +157,10 @@ def friction_label(case: Case) -> str:
     if case.engine == "exudyn":
         if opts.get("friction", "regularized") == "none" or case.group.split(":")[0].endswith("/frictionless"):
             return "none"
-        return f"tanh eps={opts.get('eps', 1e-3):g}"
+        return f"tanh eps={opts.get('eps', DEFAULT_EPS):g}"
     if opts.get("friction") is None:
         return "none"
-    return f"{opts.get('friction_sgn', 'tanh')} eps={opts.get('friction_eps', 1e-3):g}"
+    return f"{opts.get('friction_sgn', 'tanh')} eps={opts.get('friction_eps', DEFAULT_EPS):g}"
 
 
 def _inhouse_label(case: Case) -> str:

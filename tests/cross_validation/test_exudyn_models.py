@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from study import mechanisms
-from study.exudyn_models import ExudynModelError, common, initial_accelerations, run
+from study.exudyn_models import ExudynModelError, initial_accelerations, run
+from study.exudyn_models import settings as common
 from study.exudyn_models.translate import build
 from study.params import available_mechanisms, available_variants, load_parameters
 from study.reference_data import tolerance

@@ -19,6 +19,7 @@ from study.report import figures
 from study.report.context import ReportContext
 from study.report.render import fmt_int, fmt_number, md_table
 from study.studies import slider_crank as sc
+from study.studies.slider_crank_paper import slider_velocity
 
 STUDY = "slider_crank"
 VARIANTS = ("seed", "slip_then_stick", "sustained_sliding")
@@ -77,7 +78,7 @@ def _forces_figure(ctx: ReportContext, variant: str) -> str | None:
             label = f"000's plain sgn ({o['integrator']}, h = {o.get('step', float('nan')):g} s)"
         panels["friction"].append((label, r.t, r.forces["friction_guide"], style))
         panels["normal"].append((label, r.t, r.forces["normal_guide"], style))
-        panels["velocity"].append((label, r.t, 1e3 * sc.slider_velocity(v, r.q, r.qd), style))
+        panels["velocity"].append((label, r.t, 1e3 * slider_velocity(v, r.q, r.qd), style))
     exact = runs["exact"]
     fig = figures.stacked_time_series_figure(
         [("friction force F_fr (+x) [N]", panels["friction"]),

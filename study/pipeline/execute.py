@@ -1,0 +1,166 @@
+"""Running cases: one case in a worker, and every case not stored yet, saved as each arrives.
+
+:func:`run_cases` runs whatever is not stored yet on an executor (:mod:`study.pipeline.executors`),
+saves each result as it arrives (atomically: an interrupted run leaves no half-written result and
+resumes where it stopped) and records failed cases with their error without stopping the others.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+import traceback
+from concurrent.futures import Executor, Future, as_completed
+from dataclasses import dataclass, field
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from study.params import load_parameters
+from study.pipeline.cases import Case
+from study.pipeline.executors import InlineExecutor
+from study.pipeline.keys import code_version
+from study.pipeline.store import Store
+from study.results import SimulationResult
+
+
+def run_case(case: Case) -> SimulationResult:
+    """Compute one case (in whatever process the executor chose)."""
+    if case.engine == "inhouse":
+        from study.simulate import simulate
+
+        options = case.kwargs
+        initial = options.pop("initial", "consistent")
+        ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
+        if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
+            ps = load_parameters(case.mechanism, case.variant)
+            # off the constraints on purpose (the study shows what that does): the check would refuse it
+            options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd), check=False)
+        elif initial != "consistent":
+            raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
+        if ulps:
+            from study.mechanisms import initial_state, load
+
+            if "q0" not in options:
+                state = initial_state(*load(case.mechanism, case.variant))
+                options.update(q0=state.q, qd0=state.qd)
+            options.update({k: np.add(options[k], ulps * np.spacing(np.asarray(options[k], float))) for k in ("q0", "qd0")})
+        return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
+    from study import exudyn_models
+
+    options = case.kwargs
+    h = options.pop("h")
+    return exudyn_models.run(load_parameters(case.mechanism, case.variant), case.t_end, h, **options)
+
+
+def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
+    """Run a case; also returns the wall time and the code version of the process that ran it."""
+    t0 = time.perf_counter()
+    result = run_case(case)
+    return result, time.perf_counter() - t0, code_version(case.engine)
+
+
+class Progress:
+    """One status line on stderr: done / remaining / failed (redrawn on a terminal, else every ~5 %)."""
+
+    def __init__(self, total: int, title: str, stream=None):
+        self.total, self.title = total, title
+        self.done = self.failed = 0
+        self.stream = stream or sys.stderr
+        self.start = time.perf_counter()
+        self._tty = getattr(self.stream, "isatty", lambda: False)()
+        self._last_printed = -1
+
+    def update(self, failed: bool = False) -> None:
+        self.done += 1
+        self.failed += int(failed)
+        step = max(self.total // 20, 1)
+        if self._tty or self.done == self.total or self.done // step != self._last_printed // step:
+            self._last_printed = self.done
+            self._draw()
+
+    def _draw(self) -> None:
+        width = 24
+        filled = int(width * self.done / max(self.total, 1))
+        line = (f"{self.title}: [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} done, "
+                f"{self.total - self.done} remaining, {self.failed} failed, "
+                f"{time.perf_counter() - self.start:.0f} s")
+        end = "" if self._tty and self.done < self.total else "\n"
+        print(("\r" if self._tty else "") + line, end=end, file=self.stream, flush=True)
+
+
+@dataclass
+class RunSummary:
+    """What :func:`run_cases` did: counts, failed cases with their errors, wall time per case."""
+
+    cached: int = 0
+    computed: int = 0
+    failed: dict[str, str] = field(default_factory=dict)
+    expected: dict[str, str] = field(default_factory=dict)  # stopped with the error their case list expects
+    rejected: dict[str, str] = field(default_factory=dict)  # saved results that failed their check
+    wall_seconds: dict[str, float] = field(default_factory=dict)
+
+
+def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Future]]:
+    """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops."""
+    if isinstance(executor, InlineExecutor):  # one at a time, so each is saved before the next starts
+        for case in todo:
+            yield case, executor.submit(_run_case_timed, case)
+        return
+    futures = {executor.submit(_run_case_timed, case): case for case in todo}
+    try:
+        for future in as_completed(futures):
+            yield futures[future], future
+    finally:  # KeyboardInterrupt or an error while saving: do not leave work queued
+        for future in futures:
+            future.cancel()
+
+
+def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
+              stream=None) -> RunSummary:
+    """Run every case without a saved result on ``executor``; save each as it completes.
+
+    Identical cases (same key) run once. A case that raises is recorded (``Store.record_failure``)
+    and the others go on. On KeyboardInterrupt the pending cases are cancelled; finished results
+    stay saved, so a rerun resumes.
+    """
+    unique: dict[str, Case] = {}
+    for case in cases:
+        unique.setdefault(case.key(), case)
+    summary = RunSummary()
+    stream = stream or sys.stderr
+    todo = []
+    for c in unique.values():
+        why = store.problem(c)
+        if why is None:
+            continue
+        if why != "not saved":  # a damaged result is reported and recomputed, never reused
+            print(f"{c.name}: saved result rejected, recomputing: {why}", file=stream)
+            summary.rejected[c.name] = why
+            store.discard(c)
+        todo.append(c)
+    summary.cached = len(unique) - len(todo)
+    if not todo:
+        return summary
+    progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
+    for case, future in _outcomes(executor, todo):
+        try:
+            result, wall, worker_code = future.result()
+            if worker_code != code_version(case.engine):  # e.g. a Dask worker with another installed copy
+                raise RuntimeError(f"the worker runs code version {worker_code}, this process "
+                                   f"{code_version(case.engine)}: its result would be saved under a wrong key")
+            result.check_finite()  # a NaN anywhere is a failed run, never cached as a success
+        except Exception as exc:  # noqa: BLE001 - recorded, the other cases go on
+            error = f"{type(exc).__name__}: {exc}"
+            store.record_failure(case, error, "".join(traceback.format_exception(exc)))
+            expected = type(exc).__name__ == case.expect_error
+            (summary.expected if expected else summary.failed)[case.name] = error
+            progress.update(failed=not expected)
+            continue
+        if case.expect_error:  # saved (its summary shows it), but a case list's claim turned out false
+            summary.failed[case.name] = f"expected to stop with {case.expect_error}, but the run finished"
+        store.save(case, result)
+        summary.computed += 1
+        summary.wall_seconds[case.name] = wall
+        progress.update()
+    return summary

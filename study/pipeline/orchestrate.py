@@ -1,0 +1,84 @@
+"""The pipeline run: every study's case list run through the store, then its tables written and recorded."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from study.integrity import atomic_write
+from study.pipeline.cases import CASES_DIR, load_case_lists
+from study.pipeline.execute import run_cases
+from study.pipeline.executors import make_executor
+from study.pipeline.store import Store
+from study.pipeline.summaries import backend_agreement, backend_cpu, failures_table, summarize, summary_function
+from study.pipeline.tables import table_entry, table_record, write_tables
+
+PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
+
+
+def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
+                 scheduler: str | None = None, folder: Path = CASES_DIR, stream=None,
+                 record_root: Path | None = None) -> dict[str, Any]:
+    """Run every study's cases (cached ones are reused), then write their tables.
+
+    Before any case runs, every case list is loaded and its summary module imported and checked.
+    The record of the run (``pipeline_record.json``) and of the tables each study wrote (with their
+    checksums, ``tables/<study>.json``) go to ``record_root`` (default: ``cache_root``); a run of another
+    case folder must give its own, so the default record is never overwritten by it.
+
+    Returns a record with the wall time per stage, the counts and the failures (for the manifest).
+    """
+    stream = stream or sys.stderr
+    record_root = Path(cache_root if record_root is None else record_root)
+    case_lists = load_case_lists(folder, studies)
+    for cl in case_lists:
+        summary_function(cl)
+    store = Store(Path(cache_root) / "runs")
+    record: dict[str, Any] = {"stages": {}, "studies": {}, "case_keys": {}}
+    t0 = time.perf_counter()
+    with make_executor(workers, scheduler) as executor:
+        for cl in case_lists:
+            ts = time.perf_counter()
+            run = run_cases(cl.all_cases, store, executor, title=cl.study, stream=stream)
+            record["studies"][cl.study] = {"cases": len(cl.cases), "reference_samples": len(cl.samples),
+                                           "cached": run.cached, "computed": run.computed,
+                                           "failed": run.failed, "expected_failures": run.expected,
+                                           "rejected": run.rejected}
+            record["stages"][f"run:{cl.study}"] = time.perf_counter() - ts
+            record["case_keys"][cl.study] = {c.name: c.key() for c in cl.all_cases}
+    record["stages"]["run"] = time.perf_counter() - t0
+    for cl in case_lists:
+        ts = time.perf_counter()
+        written = record_root / "tables" / f"{cl.study}.json"  # the tables this study wrote last time
+        try:
+            tables = summarize(cl, store)
+        except Exception as exc:  # noqa: BLE001 - a case it needs failed or is missing, or the summary broke
+            print(f"{cl.study}: summary skipped: {type(exc).__name__}: {exc}", file=stream)
+            record["studies"][cl.study]["summary_error"] = f"{type(exc).__name__}: {exc}"
+            for path in table_record(written):
+                Path(path).unlink(missing_ok=True)  # no stale table may pass for a current one
+            written.unlink(missing_ok=True)
+            continue
+        paths = write_tables(tables, reports_dir)
+        for path in paths:
+            print(f"wrote {path}", file=stream)
+        written.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(written, json.dumps({str(p.resolve()): table_entry(p) for p in paths}, indent=1))
+        record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
+    write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
+    if any(cl.samples for cl in case_lists):
+        write_tables({"backend_agreement": backend_agreement(case_lists, store),
+                      "backend_cpu_timing": backend_cpu(case_lists, store)}, reports_dir)
+    save_record(record, record_root)
+    return record
+
+
+def save_record(record: Mapping[str, Any], cache_root: Path) -> Path:
+    """Write the pipeline record (stage wall times, counts, failures) to ``<cache_root>/pipeline_record.json``."""
+    path = Path(cache_root) / PIPELINE_RECORD
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, json.dumps(record, indent=1, sort_keys=True))
+    return path

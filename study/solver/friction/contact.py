@@ -1,0 +1,277 @@
+"""The contact solve: accelerations, normal and friction forces of every contact at one state.
+
+SPEC sec. 1 and paper 000 (eqs. 3, 10, 25-34). Each :class:`study.model.SlidingContact` j of an
+EquationsOfMotion has its normal gap as constraint row k_j, so its normal force is N_j = -lambda[k_j]
+(000: the normal reaction is ideal and drops out of D Q^(N) = 0, eq. 6). Its tangential reaction
+f_j acts along the tangent, as the generalized force J_t,j^T f_j (000 eqs. 5, 19-20)::
+
+    M qdd + Phi_q^T lambda = Q + sum_j J_t,j^T f_j,        Phi_q qdd = c = gamma + b(Phi, Phidot)
+
+    slip (direction s_j):  f_j = -s_j (R_j + mu_k,j |N_j|)                      (000 eq. 3, 32)
+    stick:                 J_t,j qdd + tangent_bias_j = 0 (v_t,j stays 0),  f_j its multiplier
+
+R_j is the contact's constant ``resistance`` (000's F). N depends on qdd, and qdd on f: the coupled
+problem is solved exactly at every evaluation. Everything is linear in f once the sign of each
+N_j is assumed (|N_j| = sigma_j N_j), so by superposition
+
+    qdd = qdd_a + U f,   lambda = lambda_a + L f
+
+(qdd_a, lambda_a: no tangential force; columns of U, L: a unit tangential force at one contact,
+from the same acceleration solver, so the multiplier form and the null-space (000's D matrix)
+forms both work), and f solves a small linear system per sign hypothesis sigma. This is the
+saddle-point system [[M, J^T], [J, 0]] with the friction column moved to the left-hand side,
+reduced to the contacts. A hypothesis is consistent if sigma_j N_j >= 0 for every assumed sign.
+Exactly one consistent solution is used. None, or two that differ, is Painleve's paradox
+(friction makes the normal force ill-posed) and raises :class:`PainleveError`; nothing is chosen
+silently. The treatments of sgn are in :mod:`study.solver.friction.laws`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from study.solver.dynamics import Dynamics
+from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb
+
+Array = np.ndarray
+
+# A sign hypothesis sigma_j for N_j is consistent if sigma_j N_j >= -CONSISTENCY_RTOL * (scale of the
+# terms summed into N_j). N_j comes from solves whose condition numbers stay below ~1e5 for the
+# study's mechanisms, so its round-off is below 1e5 * 2.2e-16 ~ 2e-11 relative; 1e-10 rejects a
+# hypothesis only when N_j has the wrong sign by more than round-off.
+CONSISTENCY_RTOL = 1e-10
+
+
+class PainleveError(RuntimeError):
+    """No consistent, or more than one consistent, sign of the normal force (Painleve's paradox).
+
+    Attributes
+    ----------
+    contacts : tuple of str
+    t : float
+    mu : tuple of float
+        The kinetic coefficients of the contacts whose normal-force sign was hypothesized.
+    consistent : int
+        Number of consistent hypotheses found (0 or >= 2 distinct ones).
+    singular : bool
+        True if every hypothesis gave a singular system (e.g. a stuck contact that the other
+        constraints lock, so its tangential force is indeterminate).
+    """
+
+    def __init__(self, message: str, contacts: tuple[str, ...], t: float, mu: tuple[float, ...], consistent: int,
+                 singular: bool = False):
+        super().__init__(message)
+        self.contacts, self.t, self.mu, self.consistent = contacts, t, mu, consistent
+        self.singular = singular
+
+
+@dataclass(frozen=True)
+class ContactSolution:
+    """Accelerations and contact forces at one state (shapes: (m,), (r,), then one entry per contact).
+
+    ``friction`` is the tangential force f_j on the body along the tangent (resistance included;
+    in stick, the force the guide must supply). ``margin`` = c R + mu_s |N| - |f| in stick (c: the
+    static fraction of R, ``RESISTANCE_READINGS``), NaN in slip.
+    """
+
+    qdd: Array
+    lam: Array
+    normal: Array
+    friction: Array
+    v_t: Array
+    stick: Array
+    margin: Array
+
+
+@dataclass
+class FrictionDynamics(Dynamics):
+    """:class:`Dynamics` with Coulomb friction at every contact of the equations of motion.
+
+    State y = [q, qd, W_applied, W_friction]: the last block is the work of each contact's
+    tangential force, dW_j/dt = f_j v_t,j. The mode passed to :meth:`rhs` is the loads' mode
+    (``n_load_modes`` entries) followed, for the exact treatment, by two entries per contact:
+    (+1 stick / -1 slip, sliding direction +-1).
+    """
+
+    law: ExactCoulomb | RegularizedCoulomb | PlainSign | None = None
+    n_load_modes: int = 0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.law is None:
+            raise ValueError("FrictionDynamics needs a friction treatment (law=make_friction(...))")
+        if not self.eom.contacts:
+            raise ValueError(f"EquationsOfMotion {self.eom.name!r} has no sliding contacts: friction needs at least one")
+        self._index = np.array([c.constraint_index for c in self.eom.contacts])
+        self._mu_k = np.array([c.mu_kinetic for c in self.eom.contacts])
+        self._mu_s = np.array([c.mu_static for c in self.eom.contacts])
+        self._resistance = np.array([c.resistance for c in self.eom.contacts])
+        # the part of R that holds a stuck contact (the exact law's reading; no static limit otherwise)
+        self._static_resistance = self._resistance * getattr(self.law, "static_resistance_fraction", 1.0)
+
+    def static_limit(self, normal: Array) -> Array:
+        """Largest tangential force each contact can supply at rest: c R + mu_s |N| [N] (see ``RESISTANCE_READINGS``)."""
+        return self._static_resistance + self._mu_s * np.abs(np.asarray(normal, dtype=float))
+
+    @property
+    def contact_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.eom.contacts)
+
+    @property
+    def n_contacts(self) -> int:
+        return len(self.eom.contacts)
+
+    def load_mode(self, mode):
+        if not self._modal or mode is None:
+            return None
+        return tuple(mode[:self.n_load_modes])
+
+    def phases(self, mode, v_t: Array) -> tuple[Array, Array]:
+        """(stick flags, slip factors s) of the contacts in ``mode`` at tangential velocities ``v_t``."""
+        nc = self.n_contacts
+        if self.law.switched:
+            if mode is None or len(mode) != self.n_load_modes + 2 * nc:
+                raise ValueError(f"the exact friction treatment needs a mode with {self.n_load_modes} load entries and "
+                                 f"2 per contact ({nc} contacts); got {mode!r}")
+            entries = np.asarray(mode[self.n_load_modes:], dtype=float).reshape(nc, 2)
+            stick = entries[:, 0] > 0
+            return stick, np.where(stick, 0.0, entries[:, 1])
+        return np.zeros(nc, dtype=bool), np.asarray(self.law.factor(v_t), dtype=float).reshape(nc)
+
+    def _setup(self, t, q, qd, mode, stick, s):
+        eom = self.eom
+        J = eom.phi_q(q)
+        c = eom.gamma(q, qd) + self.stabilization.bias(eom.phi(q), J @ qd)
+        Jt = np.array([np.asarray(ct.tangent_jacobian(q), dtype=float) for ct in eom.contacts])
+        bt = np.array([float(ct.tangent_bias(q, qd)) for ct in eom.contacts])
+        v_t = Jt @ qd
+        if stick is None or s is None:
+            stick_m, s_m = self.phases(mode, v_t)
+            stick = stick_m if stick is None else stick
+            s = s_m if s is None else s
+        stick = np.asarray(stick, dtype=bool)
+        s = np.where(stick, 0.0, np.asarray(s, dtype=float))
+        M, Q = eom.mass(q), self._forces(t, q, qd, self.load_mode(mode))
+        return M, Q, J, c, Jt, bt, v_t, stick, s
+
+    def contact_solution(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> ContactSolution:
+        """Solve the coupled friction problem at one state.
+
+        ``stick`` and ``s`` (one entry per contact) override the phases implied by ``mode``.
+        Raises :class:`PainleveError` unless exactly one normal-force sign hypothesis is consistent.
+        """
+        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, mode, stick, s)
+        return self._solve(t, M, Q, J, c, Jt, bt, v_t, stick, s)
+
+    def hypotheses(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> list[dict]:
+        """Every normal-force sign hypothesis at one state: dicts with sigma ({contact index: +-1}),
+        f, qdd, lam, normal, tol and consistent (for checks and error messages)."""
+        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, mode, stick, s)
+        return list(self._hypotheses(M, Q, J, c, Jt, bt, stick, s))
+
+    def _hypotheses(self, M, Q, J, c, Jt, bt, stick, s):
+        """Yield dicts (sigma, f, qdd, lam, normal, tol, consistent) for each sign hypothesis."""
+        nc, r, m = self.n_contacts, J.shape[0], M.shape[0]
+        k = self._index
+        qdd_a, lam_a = self.accelerations.solve(M, Q, J, c)
+        active = [j for j in range(nc) if stick[j] or s[j] != 0.0]
+        if not active:
+            yield {"sigma": {}, "f": np.zeros(nc), "qdd": qdd_a, "lam": lam_a, "normal": -lam_a[k],
+                   "tol": np.zeros(nc), "consistent": True}
+            return
+        na = len(active)
+        U, L = np.empty((m, na)), np.empty((r, na))
+        zero = np.zeros(r)
+        for col, j in enumerate(active):
+            U[:, col], L[:, col] = self.accelerations.solve(M, Jt[j], J, zero)
+        assumed = [j for j in active if not stick[j] and self._mu_k[j] > 0]
+        for signs in itertools.product((1.0, -1.0), repeat=len(assumed)):
+            sigma = dict(zip(assumed, signs))
+            A, b = np.zeros((na, na)), np.zeros(na)
+            for row, j in enumerate(active):
+                if stick[j]:
+                    A[row] = Jt[j] @ U
+                    b[row] = -(Jt[j] @ qdd_a + bt[j])
+                else:
+                    w = s[j] * self._mu_k[j] * sigma.get(j, 0.0)
+                    A[row] = -w * L[k[j]]
+                    A[row, row] += 1.0
+                    b[row] = -s[j] * self._resistance[j] + w * lam_a[k[j]]
+            try:
+                fa = np.linalg.solve(A, b)
+            except np.linalg.LinAlgError:
+                yield {"sigma": sigma, "f": None, "qdd": None, "lam": None, "normal": None, "tol": None,
+                       "consistent": False, "singular": True}
+                continue
+            lam = lam_a + L @ fa
+            normal = -lam[k]
+            tol = CONSISTENCY_RTOL * (np.abs(lam_a[k]) + np.abs(L[k]) @ np.abs(fa))
+            consistent = all(sigma[j] * normal[j] >= -tol[j] for j in assumed)
+            f = np.zeros(nc)
+            f[active] = fa
+            yield {"sigma": sigma, "f": f, "qdd": qdd_a + U @ fa, "lam": lam, "normal": normal, "tol": tol,
+                   "consistent": consistent}
+
+    def _solve(self, t, M, Q, J, c, Jt, bt, v_t, stick, s) -> ContactSolution:
+        hyps = list(self._hypotheses(M, Q, J, c, Jt, bt, stick, s))
+        good = [h for h in hyps if h["consistent"]]
+        chosen = good[0] if good else None
+        for other in good[1:]:
+            differ = [j for j in chosen["sigma"] if chosen["sigma"][j] != other["sigma"][j]]
+            # Both hypotheses agree when every contact whose assumed sign differs has N = 0 (grazing).
+            if not all(abs(h["normal"][j]) <= h["tol"][j] for j in differ for h in (chosen, other)):
+                chosen = None
+                break
+        if chosen is None:
+            self._painleve(t, hyps, len(good))
+        N = chosen["normal"]
+        f = chosen["f"]
+        margin = np.where(stick, self.static_limit(N) - np.abs(f), np.nan)
+        return ContactSolution(chosen["qdd"], chosen["lam"], N, f, v_t, stick.copy(), margin)
+
+    def _painleve(self, t, hyps, n_good):
+        assumed = sorted(hyps[0]["sigma"])
+        singular = all(h.get("singular") for h in hyps)
+        if not assumed:  # no sign was assumed: only stuck contacts, and their system is singular
+            names = tuple(c.name for c in self.eom.contacts)
+            raise PainleveError(f"t = {t:.9g} s: the stick problem of contact(s) {', '.join(map(repr, names))} is "
+                                f"singular (the other constraints lock their tangential motion)", names, float(t),
+                                tuple(float(m) for m in self._mu_s), 0, singular=True)
+        names = tuple(self.eom.contacts[j].name for j in assumed)
+        mus = tuple(float(self._mu_k[j]) for j in assumed)
+        lines = []
+        for h in hyps:
+            label = ", ".join(f"N_{self.eom.contacts[j].name} {'>' if v > 0 else '<'} 0" for j, v in h["sigma"].items())
+            if h.get("singular"):
+                lines.append(f"  assume {label}: singular system")
+            else:
+                got = ", ".join(f"N_{self.eom.contacts[j].name} = {h['normal'][j]:.6g}" for j in assumed)
+                lines.append(f"  assume {label}: {got} -> {'consistent' if h['consistent'] else 'inconsistent'}")
+        what = "no consistent" if n_good == 0 else f"{n_good} different consistent"
+        raise PainleveError(
+            f"Painleve paradox at t = {t:.9g} s, contact(s) {', '.join(repr(n) for n in names)} with mu = "
+            f"{', '.join(f'{m:g}' for m in mus)}: {what} signs of the normal force (exactly one is needed):\n"
+            + "\n".join(lines), names, float(t), mus, n_good, singular=singular)
+
+    # --- Dynamics interface ----------------------------------------------------------------------
+    def evaluate(self, t: float, q: Array, qd: Array, mode=None) -> tuple[Array, Array]:
+        sol = self.contact_solution(t, q, qd, mode)
+        return sol.qdd, sol.lam
+
+    def powers(self, t: float, q: Array, qd: Array, mode=None) -> Array:
+        return super().powers(t, q, qd, self.load_mode(mode))
+
+    def rhs(self, t: float, y: Array, mode=None) -> Array:
+        self.nfev += 1
+        q, qd, _ = self.split(y)
+        sol = self.contact_solution(t, q, qd, mode)
+        return np.concatenate([qd, sol.qdd, self.powers(t, q, qd, mode), sol.friction * sol.v_t])
+
+    def stick_flags(self, sol: ContactSolution) -> Array:
+        """1.0 in stick (exact) or apparent stick |v_t| <= eps (regularized, sign), else 0.0."""
+        if self.law.switched:
+            return sol.stick.astype(float)
+        return np.asarray(self.law.apparent_stick(sol.v_t), dtype=float)

@@ -1,0 +1,222 @@
+"""The stick/slip switching rule of the exact treatment: indicators, and the mode after a located event."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from study.errors import SimulationError
+from study.solver.friction.contact import CONSISTENCY_RTOL, FrictionDynamics, PainleveError
+
+Array = np.ndarray
+
+
+class FrictionLawError(SimulationError):
+    """A contact at rest can neither stick nor slide consistently (static limit below the kinetic force)."""
+
+
+@dataclass
+class StickSlipSwitching:
+    """Switching rule for :func:`study.solver.integrate.integrate` (its ``switching=``).
+
+    Mode = (load entries..., then per contact: e_stick, e_dir). e_stick = +1 in stick, -1 in slip;
+    e_dir = the frozen sliding direction (+-1; kept, unused, in stick). Indicators, whose signs equal
+    the mode entries while the mode holds:
+
+    - e_stick in slip:  -e_dir v_t       (crosses zero when the contact comes to rest)
+    - e_stick in stick: c R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
+    - e_dir:            the constant e_dir (never crosses)
+
+    At a crossing (``on_event``): a sliding contact at rest sticks if the force needed to hold it
+    satisfies |f_req| <= c R + mu_s |N| (f_req: the force the guide would have to supply). Otherwise it
+    slides on in the direction the other forces push it: the sign of its tangential acceleration
+    without tangential force, which is -sgn(f_req) (:meth:`_free_direction`) and stays defined at a
+    kinematic dead centre, where every v_t = 0 of a one-degree-of-freedom mechanism with a moving
+    crank lies (the contact cannot be held there: f_req is unbounded). A stuck contact whose limit is
+    reached slips in that same direction. Each transition is logged in ``transitions``.
+    """
+
+    dyn: FrictionDynamics
+    transitions: list = field(default_factory=list)
+
+    def _state(self, y):
+        m = self.dyn.m
+        return y[:m], y[m:2 * m]
+
+    def _entry(self, j: int) -> int:
+        return self.dyn.n_load_modes + 2 * j
+
+    def initial_mode(self, t0: float, y0: Array) -> tuple:
+        dyn, eom = self.dyn, self.dyn.eom
+        q, qd = self._state(y0)
+        nc = dyn.n_contacts
+        v_t = np.array([ct.tangent_jacobian(q) @ qd for ct in eom.contacts])
+        friction = []
+        for j in range(nc):
+            friction += [-1, int(np.sign(v_t[j])) or 1]
+        load = []
+        if dyn.n_load_modes:
+            g = np.asarray(eom.indicators(t0, q, qd), dtype=float)
+            load = [1 if gi >= 0 else -1 for gi in g]
+        mode = tuple(load + friction)
+        # contacts at rest: stick if the static limit allows it, else slide where the loads push
+        for j in range(nc):
+            if v_t[j] == 0.0:
+                mode = self._rest_decision(t0, q, qd, mode, j, record=False)
+        if dyn.n_load_modes and np.any(np.asarray(eom.indicators(t0, q, qd)) == 0):
+            dt = 1e-9  # as integrate.initial_mode: a zero takes the sign it has just after t0
+            y_ahead = y0 + dt * dyn.rhs(t0, y0, mode)
+            g_ahead = np.asarray(eom.indicators(t0 + dt, *self._state(y_ahead)), dtype=float)
+            g0 = np.asarray(eom.indicators(t0, q, qd), dtype=float)
+            load = [(1 if ga >= 0 else -1) if gz == 0 else mi for gz, ga, mi in zip(g0, g_ahead, mode)]
+            mode = tuple(load) + mode[dyn.n_load_modes:]
+        self.transitions.append({"t": float(t0), "contact": None, "initial": self.describe(mode)})
+        return mode
+
+    def describe(self, mode) -> dict:
+        """{contact: 'stick' | 'slip+' | 'slip-'} for a mode."""
+        out = {}
+        for j, ct in enumerate(self.dyn.eom.contacts):
+            e = self._entry(j)
+            out[ct.name] = "stick" if mode[e] > 0 else ("slip+" if mode[e + 1] > 0 else "slip-")
+        return out
+
+    def indicators(self, t: float, y: Array, mode) -> Array:
+        dyn, eom = self.dyn, self.dyn.eom
+        q, qd = self._state(y)
+        values = list(np.asarray(eom.indicators(t, q, qd), dtype=float)) if dyn.n_load_modes else []
+        stick, _ = dyn.phases(mode, None)
+        sol = dyn.contact_solution(t, q, qd, mode) if stick.any() else None
+        for j, ct in enumerate(eom.contacts):
+            direction = float(mode[self._entry(j) + 1])
+            if stick[j]:
+                values += [sol.margin[j], direction]
+            else:
+                values += [-direction * float(ct.tangent_jacobian(q) @ qd), direction]
+        return np.asarray(values)
+
+    def _free_direction(self, t, q, qd, mode, j) -> int:
+        """Sign of contact j's tangential acceleration with no tangential force there (others as in mode).
+
+        This is where the other forces push the contact: -sgn(f_req) whenever it can be held
+        (f_req = -a_t / (J_t M^-1 J_t^T) restricted to the constraints, whose denominator is > 0),
+        and still defined where it cannot (a kinematic dead centre, where a_t does not depend on f_j
+        and f_req's sign is round-off).
+        """
+        dyn = self.dyn
+        stick, s = dyn.phases(mode, None)
+        stick, s = stick.copy(), s.copy()
+        stick[j], s[j] = False, 0.0
+        free = dyn.contact_solution(t, q, qd, mode, stick=stick, s=s)
+        ct = dyn.eom.contacts[j]
+        a_t = float(ct.tangent_jacobian(q) @ free.qdd + ct.tangent_bias(q, qd))
+        return 1 if a_t >= 0 else -1
+
+    def _held(self, t, q, qd, mode, j):
+        """The solution with contact j stuck (others as in mode), or None if that problem is singular."""
+        dyn = self.dyn
+        stick, s = dyn.phases(mode, None)
+        stick, s = stick.copy(), s.copy()
+        stick[j], s[j] = True, 0.0
+        try:
+            return dyn.contact_solution(t, q, qd, mode, stick=stick, s=s)
+        except PainleveError as exc:
+            if exc.singular:
+                return None
+            raise
+
+    def _rest_decision(self, t, q, qd, mode, j, record=True, was="slip") -> tuple:
+        """The mode for contact j at rest: stick if the static limit allows, else slide where pushed."""
+        dyn = self.dyn
+        new = list(mode)
+        e = self._entry(j)
+        held = self._held(t, q, qd, mode, j)
+        if held is not None and held.margin[j] >= 0:
+            new[e] = 1
+        else:
+            new[e], new[e + 1] = -1, self._free_direction(t, q, qd, mode, j)
+            if held is not None:
+                self._check_slip_starts(t, q, qd, tuple(new), j, held)
+        new = tuple(new)
+        if record and new != tuple(mode):  # a contact found again at rest in its own direction is no transition
+            self._log(t, j, was, new, held)
+        return new
+
+    def _check_slip_starts(self, t, q, qd, new, j, held) -> None:
+        """Raise :class:`FrictionLawError` if contact j, too weakly held to stick, cannot slide either.
+
+        Sliding in direction d (the way the other forces push) is consistent only if the contact then
+        accelerates that way, d a_t >= 0. With a static limit below the kinetic resistance (reading
+        'sliding_only' with R > 0, or mu_s < mu_k) a required force between the two leaves no
+        consistent mode: held, the limit is exceeded; sliding, the kinetic force R + mu_k |N| exceeds the
+        push and stops the contact at once. Without this check the integrator would locate a new stop
+        after every restart at the same instant, forever (the Zeno limit of those restarts is a contact
+        held by the kinetic force, i.e. the reading 'holds').
+        """
+        dyn, ct = self.dyn, self.dyn.eom.contacts[j]
+        slide = dyn.contact_solution(t, q, qd, new)
+        d = new[self._entry(j) + 1]
+        a_t = float(ct.tangent_jacobian(q) @ slide.qdd + ct.tangent_bias(q, qd))
+        scale = float(np.abs(ct.tangent_jacobian(q) @ held.qdd).max() + abs(ct.tangent_bias(q, qd)))
+        if d * a_t >= -CONSISTENCY_RTOL * max(scale, abs(a_t)):
+            return
+        kinetic = float(abs(slide.friction[j]))
+        raise FrictionLawError(
+            f"contact {ct.name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
+            f"|f_req| = {abs(float(held.friction[j])):.6g} N, above its static limit {float(dyn.static_limit(held.normal)[j]):.6g} N "
+            f"(resistance_reading {dyn.law.resistance_reading!r}), but sliding {'+' if d > 0 else '-'} meets the kinetic "
+            f"force {kinetic:.6g} N (R + mu_k |N|), which decelerates it (a_t = {a_t:.3g} m/s^2 against the sliding "
+            f"direction). A static limit below the kinetic resistance makes the law inconsistent here; use "
+            f"resistance_reading 'holds' (the contact stays at rest, held by R + mu_s |N|) or a regularized law",
+            t=float(t), quantity="friction", contact=ct.name)
+
+    def _log(self, t, j, was, new, held):
+        dyn, name = self.dyn, self.dyn.eom.contacts[j].name
+        entry = {"t": float(t), "contact": name, "from": was, "to": self.describe(new)[name]}
+        if held is None:  # holding the contact is a singular problem: it is kinematically locked
+            entry.update({"f_required": float("inf"), "normal": float("nan"), "limit": float("nan")})
+        else:
+            entry.update({"f_required": float(held.friction[j]), "normal": float(held.normal[j]),
+                          "limit": float(dyn.static_limit(held.normal)[j])})
+        self.transitions.append(entry)
+
+    def on_event(self, t: float, y: Array, mode, i: int) -> tuple:
+        """The mode after indicator i crossed zero at (t, y).
+
+        Crossings at the same instant (a load's switch on the same velocity, e.g. the quick-return's
+        cutting law on v_D) are settled here too: every other indicator already past zero at t is
+        processed, each once, so the integrator restarts from a mode consistent with every indicator.
+        """
+        mode = self._switch(t, y, mode, i)
+        done = {i}
+        for _ in range(len(mode)):
+            g = self.indicators(t, y, mode)
+            late = [k for k in range(len(mode)) if k not in done and g[k] * mode[k] < 0]
+            if not late:
+                break
+            mode = self._switch(t, y, mode, late[0])
+            done.add(late[0])
+        return mode
+
+    def _switch(self, t: float, y: Array, mode, i: int) -> tuple:
+        dyn = self.dyn
+        if i < dyn.n_load_modes:
+            new = list(mode)
+            new[i] = -new[i]
+            return tuple(new)
+        j, which = divmod(i - dyn.n_load_modes, 2)
+        if which == 1:
+            raise RuntimeError(f"direction entry of contact {dyn.eom.contacts[j].name!r} crossed zero; its indicator is constant")
+        q, qd = self._state(y)
+        e = self._entry(j)
+        was = self.describe(mode)[dyn.eom.contacts[j].name]
+        if mode[e] < 0:  # sliding contact came to rest: stick or slide on
+            return self._rest_decision(t, q, qd, mode, j, was=was)
+        # stuck contact reached its static limit: slip where the loads push (against f_req)
+        held = dyn.contact_solution(t, q, qd, mode)
+        new = list(mode)
+        new[e], new[e + 1] = -1, self._free_direction(t, q, qd, mode, j)
+        new = tuple(new)
+        self._log(t, j, was, new, held)
+        return new
