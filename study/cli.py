@@ -39,10 +39,15 @@ def _initial(args: argparse.Namespace) -> int:
 
 
 def _errata(args: argparse.Namespace) -> int:
-    from study.errata import write_errata
+    from study.errata.table import update_errata
+    from study.model.compile import cache_dir
 
-    path = write_errata(args.out / "tables")
-    print(path.read_text() if path.suffix == ".md" else f"wrote {path}")
+    path, reused = update_errata(args.out / "tables", cache_dir())
+    if reused:
+        print(f"errata: the inputs (package source, reference/*.toml, sympy) are unchanged since {path} and "
+              f"{path.with_suffix('.csv').name} were written: reused them")
+    else:
+        print(path.read_text())
     return 0
 
 

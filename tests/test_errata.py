@@ -351,3 +351,47 @@ def test_latex_forms_typeset(table):
         for tex in table[column]:
             if tex:
                 assert convert(tex).startswith("<math")
+
+
+def test_update_errata_reuses_only_tables_written_from_the_same_inputs(tmp_path, monkeypatch):
+    """The errata stage of a cached 'make reproduce' reuses errata.{csv,md} only while the inputs' key and
+    both files' checksums are those recorded when they were written (the check itself is faked here:
+    what is tested is when it runs)."""
+    from study.errata import table
+
+    calls = []
+
+    def fake_write(out_dir):
+        calls.append(out_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)
+        (out_dir / "errata.csv").write_text("formula,verdict\nx,exact\n")
+        (out_dir / "errata.md").write_text("# errata\n")
+        return out_dir / "errata.md"
+
+    monkeypatch.setattr(table, "write_errata", fake_write)
+    monkeypatch.setattr(table, "inputs_key", lambda: "key-1")
+    out, cache = tmp_path / "tables", tmp_path / "cache"
+    assert table.update_errata(out, cache)[1] is False and len(calls) == 1
+    assert table.update_errata(out, cache)[1] is True and len(calls) == 1
+    (out / "errata.md").write_text("# errata, edited\n")          # a table changed since: checked again
+    assert table.update_errata(out, cache)[1] is False and len(calls) == 2
+    monkeypatch.setattr(table, "inputs_key", lambda: "key-2")     # an input changed: checked again
+    assert table.update_errata(out, cache)[1] is False and len(calls) == 3
+    (out / "errata.csv").unlink()                                 # a table missing: checked again
+    monkeypatch.setattr(table, "inputs_key", lambda: "key-2")
+    assert table.update_errata(out, cache)[1] is False and len(calls) == 4
+
+
+def test_errata_inputs_key_follows_the_reference_files(tmp_path, monkeypatch):
+    from study.errata import table
+
+    before = table.inputs_key()
+    assert table.inputs_key() == before
+    copy = tmp_path / "reference"
+    copy.mkdir()
+    for p in table.REFERENCE_DIR.glob("*.toml"):
+        (copy / p.name).write_bytes(p.read_bytes())
+    monkeypatch.setattr(table, "REFERENCE_DIR", copy)
+    assert table.inputs_key() == before
+    (copy / "printed_formulas.toml").write_text((copy / "printed_formulas.toml").read_text() + "\n# edited\n")
+    assert table.inputs_key() != before

@@ -3,16 +3,22 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
 from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
 import pandas as pd
+import sympy as sp
 
 from study.errata.judge import VERDICTS, check_formula
 from study.errata.latex import DIFFERENCE_COLOR
 from study.errata.printed import load_printed
+from study.integrity import atomic_write, sha256_file
+from study.params import REFERENCE_DIR
 from study.report.render import md_escape, md_math, md_table
+from study.sources import source_files, source_hash
 
 DEFAULT_OUT_DIR = Path(__file__).resolve().parents[2] / "reports" / "tables"
 COLUMNS = ("formula", "paper", "equation", "verdict", "printed", "derived", "derived_latex", "difference_latex",
@@ -78,6 +84,40 @@ def write_errata(out_dir: Path) -> Path:
     md = out_dir / "errata.md"
     md.write_text(errata_markdown(df), encoding="utf-8")
     return md
+
+
+def inputs_key() -> str:
+    """Hash of everything the errata table depends on: the package's source (the derivation, the
+    mechanisms, the checks), every ``reference/*.toml`` (printed formulas, parameters), sympy's version
+    and PYTHONHASHSEED (sympy's simplification order follows it)."""
+    refs = sorted(REFERENCE_DIR.glob("*.toml"))
+    extra = json.dumps({"sympy": sp.__version__, "hashseed": os.environ.get("PYTHONHASHSEED"),
+                        "reference": {p.name: sha256_file(p) for p in refs}}, sort_keys=True)
+    return source_hash(source_files("."), extra)
+
+
+def update_errata(out_dir: Path, cache_root: Path) -> tuple[Path, bool]:
+    """:func:`write_errata` unless ``out_dir`` holds the tables written from the same inputs.
+
+    The record (``<cache_root>/errata.json``) holds the inputs' key and the SHA-256 of both files as
+    written; a table edited, cut or missing since, or any changed input, means a fresh check.
+    Returns the path of ``errata.md`` and whether the saved tables were reused.
+    """
+    out_dir, record_path = Path(out_dir), Path(cache_root) / "errata.json"
+    files = [out_dir / "errata.csv", out_dir / "errata.md"]
+    key = inputs_key()
+    try:
+        record = json.loads(record_path.read_text())
+    except (OSError, ValueError):
+        record = {}
+    if record.get("key") == key and record.get("out") == str(out_dir.resolve()) and all(
+            f.exists() and record.get("files", {}).get(f.name) == sha256_file(f) for f in files):
+        return files[1], True
+    md = write_errata(out_dir)
+    record_path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(record_path, json.dumps({"key": key, "out": str(out_dir.resolve()),
+                                          "files": {f.name: sha256_file(f) for f in files}}, indent=1))
+    return md, False
 
 
 def main(argv: Sequence[str] | None = None) -> int:
