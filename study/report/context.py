@@ -11,8 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import time
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 

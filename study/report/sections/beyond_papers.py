@@ -56,6 +56,10 @@ def _n_four_bar(ctx: ReportContext) -> list[str]:
              "the ground line, rank Φ_q drops from 2N to N and the mobility jumps from 1 to N + 1; the motion "
              "passes such a position every half turn. Reduced form N = 2 over 10 s.", ""]
     runs = ctx.table("singular_four_bar_runs")
+    timing = ctx.table("singular_four_bar_timing")
+    if runs is not None:   # CPU from timing/ (machine-dependent), matched on the run's identity
+        keys = ["engine", "method", "setting"]
+        runs = runs.merge(timing, on=keys, how="left") if timing is not None else runs.assign(cpu_s=float("nan"))
     if runs is None:
         return lines + ["The singular study has not been run (`python -m study run singular`).", ""]
     passed = runs[runs["passed"].astype(str) == "True"]
