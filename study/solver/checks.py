@@ -290,7 +290,7 @@ class RunGuard:
             raise SingularConfigurationError(
                 f"{dyn.eom.name}: the acceleration system is singular at t = {t:.9g} s, q = {_fmt(q)} ({exc})"
                 + self._pose_note(y), t=float(t), quantity="qdd", pose=list(map(float, q))) from exc
-        except PainleveError as exc:
+        except PainleveError:
             # Painleve's paradox is a property of a regular frictionless problem; at a singular pose the
             # frictionless problem itself has no unique solution, and that is what is reported.
             if self.monitor is not None and self.monitor.measure(y[:dyn.m]) < self.monitor.ratio:

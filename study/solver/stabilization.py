@@ -15,7 +15,7 @@ The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np

@@ -128,7 +128,6 @@ class StickSlipSwitching:
 
     def _rest_decision(self, t, q, qd, mode, j, record=True, was="slip") -> tuple:
         """The mode for contact j at rest: stick if the static limit allows, else slide where pushed."""
-        dyn = self.dyn
         new = list(mode)
         e = self._entry(j)
         held = self._held(t, q, qd, mode, j)
