@@ -77,7 +77,7 @@ def test_targets_met_from_synthetic_tables():
     verdicts = t.met.astype(str).tolist()
     assert len(t) == 10 and verdicts.count("True") == 7
     assert verdicts.count("reported") == 2 and verdicts.count("not measured") == 1  # ratio 3', Andrews
-    assert t[t.met.astype(str) == "not measured"].how_measured.iloc[0] == "not measured: mechanism not in this branch"
+    assert t[t.met.astype(str) == "not measured"].how_measured.iloc[0] == "not measured: the benchmark has no case for it yet"
     accel = t[t.target.str.startswith("1:")].iloc[0]
     assert accel.measured == pytest.approx(0.83) and accel.threshold == THRESHOLDS["accel"][0]
     qr = t[t.target.str.startswith("2:")]
