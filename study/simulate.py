@@ -181,7 +181,8 @@ def simulate(
         return simulate_compiled(eom, ps, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
                                  step=step, output_step=output_step, acceleration_solver=acceleration_solver,
                                  progress=progress, friction=friction, friction_eps=friction_eps,
-                                 friction_sgn=friction_sgn, **method_options)
+                                 friction_sgn=friction_sgn, max_evaluations=max_evaluations, min_step=min_step,
+                                 **method_options)
 
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,

@@ -135,3 +135,50 @@ def test_user_equations_are_refused():
 def test_unknown_backend():
     with pytest.raises(ValueError, match="backend"):
         simulate("quick_return", t_end=0.1, backend="gpu")
+
+
+def test_evaluation_bound_stops_within_one_step_attempt():
+    """The compiled loop checks its evaluation count before each step attempt and after each accepted step, so
+    it stops with at least max_evaluations and fewer than max_evaluations + one attempt's evaluations (RK45: 6
+    stages, the last reused as the next step's first; the bound is checked at step boundaries, not inside)."""
+    from study.errors import RunBoundError
+
+    with pytest.raises(RunBoundError, match="reached max_evaluations = 100") as info:
+        simulate("quick_return", variant="smooth_cutting", t_end=2.0, integrator="RK45", rtol=1e-6,
+                 backend="compiled", max_evaluations=100)
+    assert 100 <= info.value.details["evaluations"] < 100 + 6
+    assert 0.0 < info.value.t < 2.0
+
+
+def test_stall_bound_stops_where_the_reference_path_stops():
+    """Both backends stop after min_step_run accepted steps in a row below min_step with a RunBoundError. The
+    two loops are separate implementations of the same step control (the compiled one is checked step by step
+    against the reference above), so they stop after the same number of accepted steps, at the same time to the
+    trajectories' agreement (adaptive_global_error_factor * rtol, relative)."""
+    from study.errors import RunBoundError
+
+    stops = {}
+    for backend in ("reference", "compiled"):
+        with pytest.raises(RunBoundError, match="50 steps in a row below min_step = 0.05") as info:
+            simulate("quick_return", variant="smooth_cutting", t_end=2.0, integrator="RK45", rtol=1e-6,
+                     backend=backend, min_step=0.05)
+        stops[backend] = info.value.t, info.value.details["steps"]
+    assert stops["compiled"][1] == stops["reference"][1]
+    rel = tolerance("adaptive_global_error_factor") * 1e-6  # the runs' rtol
+    assert stops["compiled"][0] == pytest.approx(stops["reference"][0], rel=rel)
+
+
+def test_non_finite_values_stop_the_run_where_the_reference_path_stops():
+    """RK4 with a step far too large for the quick-return (h = 0.05 s against a crank period of ~0.6 s) blows
+    up. The reference path checks every evaluation, forces and multipliers included, and names the stage time
+    of the first non-finite value; the compiled loop checks the right-hand side at the end of each step, so it
+    stops at most one step later (measured: one step later). The step grid restarts at each located switch, whose times agree to
+    fast_event_time_agreement."""
+    from study.errors import NonFiniteError
+
+    stops = {}
+    for backend in ("reference", "compiled"):
+        with pytest.raises(NonFiniteError, match="non-finite") as info:
+            simulate("quick_return", t_end=2.0, integrator="RK4", step=0.05, backend=backend)
+        stops[backend] = info.value.t
+    assert stops["reference"] <= stops["compiled"] <= stops["reference"] + 0.05 + tolerance("fast_event_time_agreement")

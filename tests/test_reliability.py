@@ -113,3 +113,21 @@ def test_command_line_failure_is_one_line_in_a_real_process(tmp_path):
     assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert "step h = 0.1 s is likely too large" in proc.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_unreachable_scheduler_fails_before_dask_would_time_out():
+    """A refused --scheduler address fails at the TCP probe, not after Dask's connect timeout (set here to
+    120 s, so a run that waited for it would fail the bound below; the probe's own bound is
+    scheduler_probe_timeout in reference/tolerances.toml)."""
+    import time
+
+    import dask
+
+    from study.pipeline import make_executor
+
+    t0 = time.monotonic()
+    with dask.config.set({"distributed.comm.timeouts.connect": "120s"}):
+        with pytest.raises(OSError, match="'tcp://127.0.0.1:9' cannot be reached"):
+            with make_executor(scheduler="tcp://127.0.0.1:9"):
+                pass
+    assert time.monotonic() - t0 < 60.0  # half of Dask's timeout: the probe, not Dask, reported it

@@ -19,13 +19,16 @@ from types import ModuleType
 
 import numpy as np
 
+from study.errors import NonFiniteError, RunBoundError
 from study.fast.codegen import generated_module
 from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
                                  STAB_BAUMGARTE, STAB_NONE, STAB_PROJECTION, STAB_SLIDING, accelerations_entry)
-from study.fast.loop import DONE, FAIL_PROJECTION, FAIL_RHS, FAIL_STEP, integrate_segment
+from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
+                             FAIL_STEP, integrate_segment)
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
+from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.assemble import assemble_result
 from study.solver.dynamics import Dynamics
@@ -163,8 +166,18 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     return out
 
 
-def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step):
-    """Integrate with the compiled loop; returns (t, y, modes, stats) of the samples."""
+def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,
+        max_evaluations: float | None = None, min_step: float | None = None):
+    """Integrate with the compiled loop; returns (t, y, modes, stats) of the samples.
+
+    The run is bounded as on the reference path: RunBoundError once its evaluations reach
+    ``max_evaluations``, or after ``min_step_run`` (reference/tolerances.toml) adaptive steps in a row
+    shorter than ``min_step``; both default as in ``study.simulate.simulate``.
+    """
+    if max_evaluations is None:
+        max_evaluations = tolerance("max_evaluations")
+    if min_step is None:
+        min_step = tolerance("min_step_fraction") * t_end
     eom, model = s.dyn.eom, s.model
     m = eom.n_coordinates
     tab = tableau(integrator)
@@ -180,7 +193,8 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     n_mode = len(mode)
     y_out = np.zeros((len(t_out), len(s.y0)))
     mode_out = np.zeros((len(t_out), max(n_mode, 1)), dtype=np.int64)
-    counters = np.array([0, 0, 0, 0, 1], dtype=np.int64)
+    counters = np.array([0, 0, 0, 0, 1, 0], dtype=np.int64)
+    bounds = np.array([float(max_evaluations), float(min_step), float(tolerance("min_step_run"))])
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
     first = float(step) if step is not None else 0.0
@@ -189,8 +203,24 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
             model.module.evaluate, model.module.indicators, model.module.kinematics, METHOD_IDS[integrator],
             arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
-            y_out, mode_out, counters, y_end)
+            y_out, mode_out, counters, y_end, bounds)
         restarts += 1
+        if outcome == FAIL_EVALUATIONS:
+            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[2]} evaluations "
+                                f"reached max_evaluations = {max_evaluations:g} (a stalled or far too long run; "
+                                f"max_evaluations= raises the bound)", t=float(t_reached), quantity="evaluations",
+                                evaluations=int(counters[2]))
+        if outcome == FAIL_STALL:
+            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[5]} steps in a "
+                                f"row below min_step = {min_step:.3g} s (a stall: the solution is near a singularity "
+                                f"or a discontinuity; min_step= overrides)", t=float(t_reached), quantity="step",
+                                steps=int(counters[1]))
+        if outcome == FAIL_NONFINITE:
+            raise NonFiniteError(f"{integrator} (compiled) failed at t = {t_reached:.9g} s: a non-finite value in the "
+                                 f"right-hand side (accelerations, multipliers or load powers) of the step ending "
+                                 f"there; likely causes: a step too large for the solution (RK4), non-finite "
+                                 f"forces, or a singular configuration", t=float(t_reached),
+                                 quantity="rhs")
         if outcome < 0:
             raise RuntimeError(f"{integrator} (compiled) failed at t = {t_reached:.9g}: {_FAILURES[outcome]}; "
                                f"rerun with backend='reference' for a diagnosis")
@@ -217,13 +247,13 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
 def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, t_end: float, *, method: str,
                       integrator: str, rtol: float, atol: float, step, output_step: float,
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
-                      **method_options) -> SimulationResult:
+                      max_evaluations: float, min_step: float, **method_options) -> SimulationResult:
     """The compiled backend of ``study.simulate.simulate`` (arguments already checked there)."""
     check_supported(ps, integrator, acceleration_solver, progress)
     s = setup(eom, ps, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()
-    t, y, modes, stats = run(s, float(t_end), t_out, integrator, rtol, atol, step)
+    t, y, modes, stats = run(s, float(t_end), t_out, integrator, rtol, atol, step, max_evaluations, min_step)
     cpu = time.process_time() - cpu0
     result = assemble_result(s.dyn, t, y, modes)
     result.stats.update({**stats, "cpu_seconds": cpu})

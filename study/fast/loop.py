@@ -29,14 +29,14 @@ from study.solver.integrate import BRENT_RTOL, BRENT_XTOL  # as the reference lo
 
 # segment outcomes (>= 0) and failures (< 0)
 DONE, EVENT = 0, 1
-FAIL_STEP, FAIL_RHS, FAIL_PROJECTION = -1, -2, -3
+FAIL_STEP, FAIL_RHS, FAIL_PROJECTION, FAIL_EVALUATIONS, FAIL_STALL, FAIL_NONFINITE = -1, -2, -3, -4, -5, -6
 BRENT_MAXITER = 100
 SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
 
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
 SEGMENT = types.Tuple((i8, f8, i8))(
     EVALUATE_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1, V1, I1, V1,
-    V1, V2, types.Array(i8, 2, "C"), I1, V1)
+    V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
 
 
 @njit(cache=True)
@@ -139,10 +139,14 @@ def _due(t_out, k, t_hi):
 
 @njit(SEGMENT, cache=True)
 def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0, t_end,
-                      first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end):
+                      first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
 
-    counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0)]; updated in place.
+    counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0), accepted steps in a row
+    below min_step]; updated in place. bounds: [max_evaluations, min_step, min_step_run], the reference
+    loop's run bounds (``study.solver.integrate.integrate``): the run fails with FAIL_EVALUATIONS once the
+    evaluations of the whole run reach max_evaluations, and with FAIL_STALL after min_step_run accepted
+    adaptive steps in a row shorter than min_step.
     Returns (outcome, t reached, index of the switching function that crossed or -1); the state
     reached is written to y_end.
     """
@@ -191,8 +195,11 @@ def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, o
             min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
             rejected = False
             while True:
-                if h_abs < min_step:
+                if not h_abs >= min_step:  # also a NaN step (a non-finite error estimate)
                     return FAIL_STEP, t, -1
+                if counters[2] + ws.counters[0] >= bounds[0]:  # rejected steps count too
+                    counters[2] += ws.counters[0]
+                    return FAIL_EVALUATIONS, t, -1
                 t_new = min(t + h_abs, t_end)
                 h = t_new - t
                 h_abs = abs(h)
@@ -206,6 +213,8 @@ def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, o
                 for i in range(n):
                     K[n_stages, i] = f_new[i]
                 err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
+                if not np.isfinite(err):  # a non-finite stage: shrinking the step would only hide it
+                    return FAIL_NONFINITE, t, -1
                 if err < 1:
                     factor = MAX_FACTOR if err == 0 else min(MAX_FACTOR, SAFETY * err ** exponent)
                     if rejected:
@@ -215,6 +224,17 @@ def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, o
                 h_abs *= max(MIN_FACTOR, SAFETY * err ** exponent)
                 rejected = True
         counters[1] += 1
+        for i in range(n):
+            if not np.isfinite(f_new[i]):  # RK4 (no error estimate) or an infinite error estimate
+                return FAIL_NONFINITE, t_new, -1
+        if counters[2] + ws.counters[0] >= bounds[0]:
+            counters[2] += ws.counters[0]
+            return FAIL_EVALUATIONS, t_new, -1
+        if method != RK4_ID and t_new < t_end:
+            counters[5] = counters[5] + 1 if h < bounds[1] else 0
+            if counters[5] >= bounds[2]:
+                counters[2] += ws.counters[0]
+                return FAIL_STALL, t_new, -1
         dense_ready = False
         # --- 1. switches ----------------------------------------------------------------------
         if n_events > 0:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import socket
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from typing import Iterator
 
@@ -34,6 +35,8 @@ def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Ex
         except ImportError as exc:  # the extra is optional; say how to get it
             raise RuntimeError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
         try:
+            if not isinstance(scheduler, Client):
+                _probe(scheduler)
             client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         except OSError as exc:  # unreachable or refusing: name the address, no traceback
             raise OSError(f"scheduler {scheduler!r} cannot be reached: {exc}") from None
@@ -50,6 +53,24 @@ def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Ex
         return
     with ProcessPoolExecutor(max_workers=workers) as pool:
         yield pool
+
+
+def _probe(address: str) -> None:
+    """OSError at once if nothing listens at a 'tcp://host:port' address.
+
+    Dask's Client retries a refused connection until its connect timeout (30 s by default); one TCP
+    connection attempt, bounded by ``scheduler_probe_timeout`` (reference/tolerances.toml), tells a
+    refusing or unroutable address apart first. Other address forms are left to Dask.
+    """
+    from urllib.parse import urlsplit
+
+    from study.reference_data import tolerance
+
+    parts = urlsplit(address)
+    if parts.scheme != "tcp" or parts.hostname is None or parts.port is None:
+        return
+    with socket.create_connection((parts.hostname, parts.port), timeout=tolerance("scheduler_probe_timeout")):
+        pass
 
 
 def environment_workers() -> int:

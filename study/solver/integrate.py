@@ -243,7 +243,7 @@ def integrate(
     def stop(reason: str, t_now: float, y_now: Array, h: float) -> RunBoundError:
         extra = describe(t_now, y_now) if describe is not None else ""
         return RunBoundError(f"{method} stopped at t = {t_now:.9g} s: {reason}" + (f"; {extra}" if extra else ""),
-                             t=float(t_now), quantity="step", step=h)
+                             t=float(t_now), quantity="step", step=h, steps=traj.steps)
     options = {"rtol": rtol, "atol": atol} if method != "RK4" else {}
     if step is not None:
         options["first_step"] = step
@@ -258,13 +258,13 @@ def integrate(
             if solver.status == "failed":
                 raise stop(f"{message} (step size collapsed)", t_old, solver.y, getattr(solver, "h_abs", 0.0))
             h_taken = solver.t - t_old
+            traj.steps += 1
             small = min_step is not None and solver.status == "running" and method != "RK4" and h_taken < min_step
             small_run = small_run + 1 if small else 0
             if small_run >= small_limit:
                 raise stop(f"{small_run} steps in a row below min_step = {min_step:.3g} s (the last h = {h_taken:.3g} s; "
                            f"a stall: the solution is near a singularity or a discontinuity; min_step= overrides)",
                            solver.t, solver.y, h_taken)
-            traj.steps += 1
             dense = solver.dense_output()
             if indicators is not None:
                 g_new = np.asarray(indicators(solver.t, solver.y))
