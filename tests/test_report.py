@@ -183,7 +183,7 @@ def test_case_lists_name_their_report_sections(tmp_path):
 
     assert report_sections(pl.load_case_lists()) == (
         "claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-        "work_precision", "benchmarks", "beyond_papers")
+        "work_precision", "benchmarks", "beyond_papers", "reproducibility")
     folder = tmp_path / "cases"
     folder.mkdir()
     (folder / "a.toml").write_text(TINY)

@@ -16,22 +16,43 @@ def _table(**columns) -> pd.DataFrame:
 
 def test_rules_come_from_reference_with_reasons():
     """Every class of reference/verify.toml states a reason; a listed column gets its class, others the default."""
-    run_error = rule_for("work_precision", "max_abs_dq")
+    run_error = rule_for("sensitivity", "max_abs_dq")
     assert run_error.name == "run_error" and run_error.reason
     assert rule_for("work_precision_orders", "error_fine").name == "fixed_step_error"  # the per-table override
+    assert rule_for("work_precision", "max_abs_dq").name == "magnitude_error"
     assert rule_for("anything", "no_such_column").name == "default"
     assert not rule_for("perturbation_check", "worst_abs_diff").compare
 
 
 def test_numbers_within_and_beyond_their_rule():
-    rule = rule_for("work_precision", "max_abs_dq")
+    rule = rule_for("sensitivity", "max_abs_dq")
     base = 1e-6
     inside = base * (1 + 0.9 * rule.rtol)
     outside = base * (1 + 1.1 * rule.rtol) + rule.atol
-    ok = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[inside]))
-    bad = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[outside]))
+    ok = compare_tables("sensitivity", _table(max_abs_dq=[base]), _table(max_abs_dq=[inside]))
+    bad = compare_tables("sensitivity", _table(max_abs_dq=[base]), _table(max_abs_dq=[outside]))
     assert ok["passed"].all() and not bad["passed"].any()
     assert bad["worst_rel_diff"].iloc[0] == pytest.approx((outside - base) / base)
+
+
+def test_decade_rule_judges_the_order_of_magnitude():
+    """A magnitude class passes a factor below 10**decades either way, fails above it and on a sign change."""
+    rule = rule_for("work_precision", "max_abs_dq")
+    factor = 10 ** rule.decades
+    base = 1e-6  # far above the class's atol, so only the decade test can pass a large move
+    for new, passes in [(base * 0.9 * factor, True), (base / (0.9 * factor), True), (base * 1.1 * factor, False),
+                        (base / (1.1 * factor), False), (-base, False)]:
+        result = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[new]))
+        assert bool(result["passed"].all()) is passes, (new, passes)
+
+
+def test_row_rules_select_cells_by_equal_cells():
+    """[[rows]] entries override a column's rule in the rows they select, and only there."""
+    old = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-8, 1e-8])
+    lsoda_moved = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-6, 1e-8])
+    rk45_moved = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-8, 1e-6])
+    assert compare_tables("sliding_mode_runs", old, lsoda_moved)["passed"].all()  # LSODA cells: not compared
+    assert not compare_tables("sliding_mode_runs", old, rk45_moved)["passed"].all()
 
 
 def test_verdicts_must_be_identical():
