@@ -182,3 +182,18 @@ def test_non_finite_values_stop_the_run_where_the_reference_path_stops():
             simulate("quick_return", t_end=2.0, integrator="RK4", step=0.05, backend=backend)
         stops[backend] = info.value.t
     assert stops["reference"] <= stops["compiled"] <= stops["reference"] + 0.05 + tolerance("fast_event_time_agreement")
+
+
+@pytest.mark.parametrize("integrator, rtol", [("DOP853", 1e-4), ("RK45", 1e-4), ("DOP853", 1e-5)])
+def test_switches_at_loose_tolerances_as_on_the_reference_path(integrator, rtol):
+    """At loose tolerances a step can start on the far side of a switching surface (it is zero there up to
+    round-off right after a located switch). The compiled loop once returned a root outside the step (t = 0)
+    and restarted the run there until the step collapsed; it now applies the reference loop's rule
+    (_first_crossing). Both paths must locate the same switches, and their runs, each within
+    adaptive_global_error_factor * rtol * max|q| of the exact solution, within twice that of each other."""
+    runs = {b: simulate("quick_return", variant="seed", t_end=2.0, integrator=integrator, rtol=rtol, backend=b)
+            for b in ("reference", "compiled")}
+    ref, fast = runs["reference"], runs["compiled"]
+    assert fast.stats["events"] == ref.stats["events"] > 0
+    bound = 2 * tolerance("adaptive_global_error_factor") * rtol * np.abs(ref.q).max()
+    assert np.abs(fast.q - ref.q).max() <= bound

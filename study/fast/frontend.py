@@ -23,8 +23,8 @@ from study.errors import NonFiniteError, RunBoundError
 from study.fast.codegen import generated_module
 from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
                                  STAB_BAUMGARTE, STAB_NONE, STAB_PROJECTION, STAB_SLIDING, accelerations_entry)
-from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
-                             FAIL_STEP, integrate_segment)
+from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
+                             FAIL_STALL, FAIL_STEP, integrate_segment)
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
@@ -215,6 +215,11 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
                                 f"row below min_step = {min_step:.3g} s (a stall: the solution is near a singularity "
                                 f"or a discontinuity; min_step= overrides)", t=float(t_reached), quantity="step",
                                 steps=int(counters[1]))
+        if outcome == FAIL_LOCATE:
+            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: the switch of switching "
+                                f"function {i_event} cannot be located within the step from there (its interpolant "
+                                f"returns to the side it started on and stays there): the step is too large for the "
+                                f"solution (use a smaller rtol)", t=float(t_reached), quantity="step")
         if outcome == FAIL_NONFINITE:
             raise NonFiniteError(f"{integrator} (compiled) failed at t = {t_reached:.9g} s: a non-finite value in the "
                                  f"right-hand side (accelerations, multipliers or load powers) of the step ending "

@@ -25,11 +25,11 @@ from study.fast.project import project
 from study.fast.signatures import EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
-from study.solver.integrate import BRENT_RTOL, BRENT_XTOL  # as the reference loop
+from study.solver.integrate import BRENT_RTOL, BRENT_XTOL, SCAN_POINTS  # as the reference loop
 
 # segment outcomes (>= 0) and failures (< 0)
 DONE, EVENT = 0, 1
-FAIL_STEP, FAIL_RHS, FAIL_PROJECTION, FAIL_EVALUATIONS, FAIL_STALL, FAIL_NONFINITE = -1, -2, -3, -4, -5, -6
+FAIL_STEP, FAIL_RHS, FAIL_PROJECTION, FAIL_EVALUATIONS, FAIL_STALL, FAIL_NONFINITE, FAIL_LOCATE = -1, -2, -3, -4, -5, -6, -7
 BRENT_MAXITER = 100
 SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
 
@@ -112,6 +112,38 @@ def locate(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, 
             xcur += delta if sbis > 0 else -delta
         fcur = _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws, ytmp, g)
     return xcur
+
+
+@njit(cache=True)
+def first_crossing(evaluate, indicators, method, D, n_rows, t_old, h, y_old, t_new, i, mode, p, lp, ci, cf, ws, ytmp,
+                   g):
+    """The first time in [t_old, t_new] at which switching function i leaves the side mode[i], or NaN if the
+    interpolant comes back to that side and stays there; the rule of the reference loop's ``_first_crossing``
+    (study/solver/integrate.py), whose docstring gives the reasons. Normally the step starts on the side
+    mode[i] and Brent's method brackets the step; right after a located switch the step can start on the far
+    side (g is zero up to round-off there), and then SCAN_POINTS samples decide."""
+    sign = mode[i]
+    if _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, t_old, i, mode, p, lp, ci, cf, ws, ytmp,
+          g) * sign >= 0:
+        return locate(evaluate, indicators, method, D, n_rows, t_old, h, y_old, t_old, t_new, i, mode, p, lp, ci,
+                      cf, ws, ytmp, g)
+    back = -1
+    for k in range(1, SCAN_POINTS + 1):
+        s = t_old + (t_new - t_old) * k / SCAN_POINTS
+        if _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp,
+              g) * sign >= 0:
+            back = k
+            break
+    if back < 0:
+        return t_old
+    for k in range(back + 1, SCAN_POINTS + 1):
+        s = t_old + (t_new - t_old) * k / SCAN_POINTS
+        if _g(evaluate, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp,
+              g) * sign < 0:
+            s_prev = t_old + (t_new - t_old) * (k - 1) / SCAN_POINTS
+            return locate(evaluate, indicators, method, D, n_rows, t_old, h, y_old, s_prev, s, i, mode, p, lp, ci,
+                          cf, ws, ytmp, g)
+    return np.nan
 
 
 @njit(cache=True)
@@ -247,8 +279,11 @@ def integrate_segment(evaluate, indicators, kinematics, method, tab, n_stages, o
                         dense_setup(evaluate, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
                                     mode, p, lp, ci, cf, ws, tmp)
                         dense_ready = True
-                    root = locate(evaluate, indicators, method, D, n_rows, t_old, h, y, t_old, t_new, i, mode,
-                                  p, lp, ci, cf, ws, tmp, g_tmp)
+                    root = first_crossing(evaluate, indicators, method, D, n_rows, t_old, h, y, t_new, i, mode,
+                                          p, lp, ci, cf, ws, tmp, g_tmp)
+                    if np.isnan(root):
+                        counters[2] += ws.counters[0]
+                        return FAIL_LOCATE, t_old, i
                     if root < t_e:
                         t_e, i_e = root, i
             if i_e >= 0:
