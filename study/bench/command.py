@@ -2,6 +2,11 @@
 
 Runs the sections (or some of them, ``--only``; the others' tables are read from the output folder)
 and writes every table to ``reports/benchmarks/*.csv``, ``targets.csv`` last, and ``machine.json``.
+Its runs are the cases of ``reference/cases/bench.toml``, saved in the benchmark's own store (see
+:mod:`study.bench.harness`): a rerun of the same code reuses their saved timings (an interrupted
+benchmark resumes); ``--remeasure`` discards them first. A timing is a property of the process that
+made it: the loop overhead divides a run's CPU by one evaluation's cost timed in this process, so
+compare like with like after a partial rerun (or use ``--remeasure``).
 """
 
 from __future__ import annotations
@@ -9,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import time
 from pathlib import Path
 
@@ -18,12 +24,13 @@ from study.bench.accuracy import cheapest, ratios
 from study.bench.compile_time import compile_time
 from study.bench.evaluations import accel_costs
 from study.bench.figure import save_work_precision_figure
-from study.bench.harness import log, machine
+from study.bench.harness import bench_store, log, machine
 from study.bench.profile import overhead_profile
 from study.bench.quick_return import quick_return_20s
 from study.bench.scaling import scaling
 from study.bench.settings import (CASES, EXUDYN_REPEATS, EXUDYN_RUN_BUDGET, LINEAR_REPEATS, LONG_RUN, OUT,
                                   REF_CHECK_RTOLS, REF_RTOL, T2_T_END, repeats)
+from study.bench.summary import summarize
 from study.bench.sweeps import sweep
 from study.bench.targets import evaluate_targets
 from study.integrity import atomic_write
@@ -37,6 +44,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """The benchmark's options (shared by ``python -m study.bench`` and ``python -m study bench``)."""
     parser.add_argument("--quick", action="store_true", help="short smoke run (1-2 s horizons, few repeats)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
+    parser.add_argument("--remeasure", action="store_true",
+                        help="discard the benchmark's saved runs first, so every timing is measured again (by default a "
+                             "run saved by an earlier benchmark of the same code is reused, so an interrupted benchmark "
+                             "resumes)")
     parser.add_argument("--skip-compile", action="store_true", help="do not measure the one-off compile time")
     parser.add_argument("--only", nargs="+", metavar="SECTION",
                         help="run only these sections (accel, qr20, sweep, scaling, profile, studies, compile); the others' tables "
@@ -70,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--only {', '.join(sorted(unknown))}: unknown section(s); valid: {', '.join(SECTIONS)}")
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
+    if args.remeasure:
+        shutil.rmtree(bench_store().root, ignore_errors=True)
 
     def saved(name):
         path = out / name
@@ -81,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     info.update({"repeats": repeats(args.quick), "quick": args.quick, "long_run_s": LONG_RUN, "reference_rtol": REF_RTOL,
                  "reference_check_rtols": list(REF_CHECK_RTOLS), "exudyn_run_budget_s": EXUDYN_RUN_BUDGET,
                  "exudyn_repeats": EXUDYN_REPEATS, "linearity_repeats": LINEAR_REPEATS,
-                 "sections_run": sorted(only), "load_average_at_start": os.getloadavg()[0]})
+                 "sections_run": sorted(only), "load_average_at_start": os.getloadavg()[0],
+                 "saved_runs": str(bench_store().root), "remeasure": args.remeasure})
     log(f"machine: {info['platform']}, {info['cpu_count']} CPUs, load {os.getloadavg()}; output {out}")
     log("warming up the compiled path (loads or builds the cache)")
     for mech, (variant, _, extra) in CASES.items():
@@ -99,9 +113,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         qr20 = saved("quick_return_20s.csv")
     if "sweep" in only:
-        parts = [sweep(m, args.quick) for m in CASES]
-        wp = pd.concat([p[0] for p in parts], ignore_index=True)
-        sweep_refs = [r for p in parts for r in p[1]]
+        tables = summarize([c for m in CASES for c in sweep(m, args.quick)], bench_store().load)
+        wp, sweep_refs = tables["work_precision"], tables["references"]
         write_csv(wp, out / "work_precision.csv")
         per_level = cheapest(wp)
         write_csv(per_level, out / "cpu_to_accuracy.csv")
@@ -114,8 +127,8 @@ def run(args: argparse.Namespace) -> int:
         old = saved("references.csv") if (out / "references.csv").exists() else pd.DataFrame()
         keep = [] if old.empty else [old[old.t_end == (2.0 if args.quick else T2_T_END)] if "qr20" not in only
                                      else old[old.t_end != (2.0 if args.quick else T2_T_END)]]
-        new = pd.DataFrame((sweep_refs if "sweep" in only else []) + (qr_refs if "qr20" in only else []))
-        write_csv(pd.concat([*keep, new], ignore_index=True), out / "references.csv")
+        new = ([sweep_refs] if "sweep" in only else []) + ([pd.DataFrame(qr_refs)] if "qr20" in only else [])
+        write_csv(pd.concat([*keep, *new], ignore_index=True), out / "references.csv")
     if "scaling" in only:
         time_df, density_df, mem_df = scaling(args.quick)
         write_csv(time_df, out / "scaling_simulated_time.csv")

@@ -1,7 +1,10 @@
-"""The timing harness: one timed run (in-house or Exudyn), medians of repeated timings, the error measure.
+"""The timing harness: a run as a case of the pipeline, medians of repeated timings, the error measure.
 
-CPU times are ``time.process_time`` of the integration only (in-house: ``stats['cpu_seconds']``;
-Exudyn: the process time around its ``SolveDynamic``), medians of :data:`~study.bench.settings.REPEATS`
+Every run of the benchmark is a case (``reference/cases/bench.toml``, or one built by
+:func:`inhouse_case` / :func:`at_setting` for a setting the list cannot hold in advance) run
+through the pipeline's store (:func:`execute`: cached, checked on every read, in this process, one at
+a time); its k-th timing is the case with option ``repeat = k`` (:func:`repeat_of`). CPU times are
+``time.process_time`` of the integration only (in-house: ``stats['cpu_seconds']``; Exudyn: the process time around its ``SolveDynamic``), medians of :data:`~study.bench.settings.REPEATS`
 runs; runs longer than :data:`~study.bench.settings.LONG_RUN` s are repeated fewer times
 (:func:`repeats_for`, at least once); every table row records its repeats.
 """
@@ -12,13 +15,15 @@ import os
 import platform
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from study.bench.settings import EPS, EXUDYN_ENGINES, LONG_RUN, LONG_RUN_TOTAL, OUTPUT_STEP, repeats
+from study.bench.settings import CASE_LIST, LONG_RUN, LONG_RUN_TOTAL, OUTPUT_STEP, STORE_FOLDER, repeats
 from study.compare import max_deviation
-from study.results import package_versions
-from study.simulate import simulate
+from study.model.compile import cache_dir
+from study.pipeline import Case, InlineExecutor, Store, run_cases
+from study.results import SimulationResult, package_versions
 
 
 def log(msg: str) -> None:
@@ -64,38 +69,77 @@ def median_cpu(fn, repeats: int) -> tuple[float, object]:
     return float(np.median(values)), last
 
 
-def inhouse_timer(mech, variant, t_end, extra, backend, integrator, setting):
-    """A timing closure: one in-house run -> (CPU seconds of the integration, result)."""
-    kw = dict(eom_or_mechanism=mech, variant=variant, t_end=t_end, integrator=integrator, backend=backend,
-              output_step=OUTPUT_STEP, **extra)
+def inhouse_case(mech: str, variant: str, t_end: float, extra: dict, backend: str, integrator: str, setting: float,
+                 group: str) -> Case:
+    """An in-house run of the benchmark as a case: rtol ``setting`` (atol = rtol/100), or RK4's step."""
+    options = dict(integrator=integrator, backend=backend, output_step=OUTPUT_STEP, **extra)
     if integrator == "RK4":
-        kw["step"] = setting
+        options["step"] = setting
     else:
-        kw.update(rtol=setting, atol=setting * 1e-2)
-
-    def fn():
-        r = simulate(**kw)
-        return r.stats["cpu_seconds"], r
-    return fn
+        options.update(rtol=setting, atol=setting * 1e-2)
+    return Case(CASE_LIST.study, group, "inhouse", mech, variant, float(t_end), tuple(sorted(options.items())),
+                (("setting", f"{setting:g}"),))
 
 
-def exudyn_timer(mech, variant, t_end, solver, h, configuration="tuned"):
-    """A timing closure: one Exudyn run at fixed step h -> (process CPU seconds of SolveDynamic, result).
+def _with(case: Case, options: dict, labels: dict) -> Case:
+    return replace(case, options=tuple(sorted({**case.kwargs, **options}.items())),
+                   labels=tuple({**dict(case.labels), **labels}.items()))
 
-    The process CPU time around ``SolveDynamic`` (Exudyn's initialization and time loop, user functions
-    included), like the in-house ``process_time`` of the integration; Exudyn's own ``timer.total`` is
-    wall-clock time (measured: 1.5-2x the process time on the shared, loaded machine).
+
+def at_setting(case: Case, value: float) -> Case:
+    """The case at another value of what its sweep varies (see :func:`setting`; atol follows rtol / 100)."""
+    options = case.kwargs
+    if case.engine == "exudyn":
+        new = {"h": value}
+    elif "step" in options:
+        new = {"step": value}
+    else:
+        new = {"rtol": value, "atol": value * 1e-2}
+    return _with(case, new, {"setting": f"{value:g}"})
+
+
+def with_labels(case: Case, **labels: str) -> Case:
+    """The case with labels added (what the benchmark ran it for, e.g. ``stage``): the same key."""
+    return _with(case, {}, labels)
+
+
+def repeat_of(case: Case, k: int) -> Case:
+    """The k-th timing of a case (k = 0: the case itself): option ``repeat = k``, the same result."""
+    return case if k == 0 else _with(case, {"repeat": k}, {"repeat": str(k)})
+
+
+def setting(case: Case) -> float:
+    """The value a sweep varies: Exudyn's step h, RK4's step or rtol."""
+    options = case.kwargs
+    return float(options["h"] if case.engine == "exudyn" else options.get("step", options.get("rtol")))
+
+
+def bench_store() -> Store:
+    """The benchmark's saved runs: folder :data:`~study.bench.settings.STORE_FOLDER` of the cache root."""
+    return Store(cache_dir() / STORE_FOLDER)
+
+
+def execute(case: Case) -> SimulationResult:
+    """Run a case through the pipeline's store in this process (reused if saved); its saved result.
+
+    Raises :class:`study.pipeline.MissingResult` naming the error if the run failed.
     """
-    from study import exudyn_models
-    from study.params import load_parameters
+    store = bench_store()
+    run_cases([case], store, InlineExecutor(), title=case.name)
+    return store.load(case)
 
-    ps = load_parameters(mech, variant)
 
-    def fn():
-        r = exudyn_models.run(ps, t_end, h, solver=solver, output_step=OUTPUT_STEP, friction="regularized", eps=EPS,
-                              configuration=configuration)
-        return r.stats["process_cpu_seconds"], r
-    return fn
+def cpu_seconds(case: Case, result: SimulationResult) -> float:
+    """CPU of a run's integration: in-house ``stats['cpu_seconds']``; Exudyn the process time around
+    ``SolveDynamic`` (its own ``timer.total`` is wall-clock time, measured 1.5-2x the process time on
+    the shared, loaded machine), user functions included."""
+    return float(result.stats["process_cpu_seconds" if case.engine == "exudyn" else "cpu_seconds"])
+
+
+def timed(case: Case, n: int) -> tuple[float, SimulationResult]:
+    """Median CPU of ``n`` timings of a case (repeats 0 ... n-1, each a saved run), and the last result."""
+    results = [execute(repeat_of(case, k)) for k in range(n)]
+    return float(np.median([cpu_seconds(case, r) for r in results])), results[-1]
 
 
 def max_dq(result, ref) -> float:
@@ -103,9 +147,3 @@ def max_dq(result, ref) -> float:
     if len(result.t) != len(ref.t):
         raise ValueError(f"run has {len(result.t)} samples, reference {len(ref.t)}: not comparable")
     return max_deviation(result, ref, "q")
-
-
-def timer(mech, variant, t_end, extra, engine, method, setting):
-    if engine in EXUDYN_ENGINES:
-        return exudyn_timer(mech, variant, t_end, method, setting, EXUDYN_ENGINES[engine])
-    return inhouse_timer(mech, variant, t_end, extra, "compiled" if "compiled" in engine else "reference", method, setting)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from study.bench.harness import inhouse_timer, log, median_cpu
+from study.bench.harness import inhouse_case, log, timed
 from study.bench.settings import CASES, OUTPUT_STEP, RATIO_LEVEL, T2_LEVEL
 
 
@@ -36,8 +36,8 @@ def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, 
                          float(loop.loc[mech, "us_per_evaluation"])))
     rows = []
     for mech, variant, t_end, extra, rtol, eval_us in runs:
-        cpu, r = median_cpu(inhouse_timer(mech, variant, t_end, extra, "compiled", "DOP853", rtol), repeats)
-        start, _ = median_cpu(inhouse_timer(mech, variant, OUTPUT_STEP, extra, "compiled", "DOP853", rtol), repeats)
+        cpu, r = timed(inhouse_case(mech, variant, t_end, extra, "compiled", "DOP853", rtol, "profile"), repeats)
+        start, _ = timed(inhouse_case(mech, variant, OUTPUT_STEP, extra, "compiled", "DOP853", rtol, "profile"), repeats)
         call_us = float(call.loc[mech, "us_per_evaluation"]) if mech in call.index else np.nan
         nfev = int(r.stats["nfev"])
         ev = int(r.stats.get("events", 0))

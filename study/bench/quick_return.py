@@ -7,36 +7,40 @@ loop overhead of every run (part g's first measure).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pandas as pd
 
 from study.bench.evaluations import eval_cost_us
-from study.bench.harness import inhouse_timer, log, max_dq, median_cpu
-from study.bench.settings import REF_RTOL, T2_REF_RTOL, T2_RTOLS, T2_T_END, T2_VARIANTS, repeats
+from study.bench.harness import execute, log, max_dq, timed
+from study.bench.settings import REF_RTOL, T2_REF_RTOL, T2_T_END, T2_VARIANTS, group, repeats
 
 
-def independent_reference(mech: str, variant: str, t_end: float, extra: dict) -> tuple[object, float, dict]:
+def independent_reference(variant: str, t_end: float) -> tuple[object, float, dict]:
     """A reference independent of the DOP853 runs it judges: compiled RK45 (another integrator, other
-    coefficients, other error estimator) at rtol :data:`T2_REF_RTOL`; its error is bounded by its
-    distance to compiled DOP853 at :data:`REF_RTOL` (the two share no step, so the distance bounds the
-    error of either unless both err alike)."""
-    ref = inhouse_timer(mech, variant, t_end, extra, "compiled", "RK45", T2_REF_RTOL)()[1]
-    other = inhouse_timer(mech, variant, t_end, extra, "compiled", "DOP853", REF_RTOL)()[1]
+    coefficients, other error estimator) at rtol :data:`T2_REF_RTOL` (group ``"quick_return 20 s:
+    reference"``); its error is bounded by its distance to compiled DOP853 at :data:`REF_RTOL` (``"...:
+    reference check"``; the two share no step, so the distance bounds the error of either unless both
+    err alike)."""
+    ref_case, = (replace(c, t_end=t_end) for c in group("quick_return 20 s: reference") if c.variant == variant)
+    check_case, = (replace(c, t_end=t_end) for c in group("quick_return 20 s: reference check") if c.variant == variant)
+    ref, other = execute(ref_case), execute(check_case)
     unc = max_dq(other, ref)
-    log(f"reference {mech} {variant} {t_end:g} s: RK45 rtol {T2_REF_RTOL:g} vs DOP853 rtol {REF_RTOL:g}: "
+    log(f"reference quick_return {variant} {t_end:g} s: RK45 rtol {T2_REF_RTOL:g} vs DOP853 rtol {REF_RTOL:g}: "
         f"max|dq| {unc:.2e}")
-    return ref, unc, {"mechanism": mech, "variant": variant, "t_end": t_end, "integrator": "RK45 (compiled)",
-                      "reference_rtol": T2_REF_RTOL, "reference_atol": T2_REF_RTOL * 1e-2,
-                      "check_rtol": REF_RTOL, "check_atol": REF_RTOL * 1e-2,
+    return ref, unc, {"mechanism": "quick_return", "variant": variant, "t_end": t_end, "integrator": "RK45 (compiled)",
+                      "reference_rtol": ref_case.kwargs["rtol"], "reference_atol": ref_case.kwargs["atol"],
+                      "check_rtol": check_case.kwargs["rtol"], "check_atol": check_case.kwargs["atol"],
                       "max_abs_dq_check_vs_reference": unc, "reference_steps": ref.stats["steps"],
                       "check_steps": other.stats["steps"]}
 
 
 def quick_return_20s(quick: bool) -> tuple[pd.DataFrame, list[dict]]:
-    """Compiled DOP853 over :data:`T2_RTOLS` (decades) on the 20 s quick-return, smooth and on/off
+    """Compiled DOP853 over the rtol grid of ``"quick_return 20 s: DOP853"`` (decades) on the 20 s quick-return, smooth and on/off
     cutting laws, each against :func:`independent_reference`, with the loop overhead of every run.
 
-    Every candidate is timed :func:`~study.bench.settings.repeats` times (runs of ~0.1 s). The loop overhead is the run's CPU
-    divided by (its evaluations × the cost of one evaluation, :func:`eval_cost_us`, timed in the same
+    Every candidate is timed :func:`~study.bench.settings.repeats` times (runs of ~0.1 s). The loop
+    overhead is the run's CPU divided by (its evaluations × the cost of one evaluation, :func:`eval_cost_us`, timed in the same
     process right before the runs).
 
     Returns
@@ -50,17 +54,17 @@ def quick_return_20s(quick: bool) -> tuple[pd.DataFrame, list[dict]]:
     n = repeats(quick)
     rows, ref_rows = [], []
     for variant in T2_VARIANTS:
-        ref, unc, rr = independent_reference("quick_return", variant, t_end, {})
+        ref, unc, rr = independent_reference(variant, t_end)
         ref_rows.append(rr)
         eval_us = eval_cost_us("quick_return", variant, {}, n, 2000 if quick else 20000)
         log(f"(f) quick_return {variant}: one evaluation {eval_us:.3f} us (compiled loop)")
-        for rtol in T2_RTOLS:
-            fn = inhouse_timer("quick_return", variant, t_end, {}, "compiled", "DOP853", rtol)
-            cpu, r = median_cpu(fn, n)
+        for case in (replace(c, t_end=t_end) for c in group("quick_return 20 s: DOP853") if c.variant == variant):
+            rtol, atol = case.kwargs["rtol"], case.kwargs["atol"]
+            cpu, r = timed(case, n)
             err = max_dq(r, ref)
             overhead = cpu / (r.stats["nfev"] * eval_us * 1e-6)
             rows.append({"variant": variant, "t_end": t_end, "integrator": "DOP853 (compiled)", "rtol": rtol,
-                         "atol": rtol * 1e-2, "error": err, "cpu_s": cpu, "repeats": n,
+                         "atol": atol, "error": err, "cpu_s": cpu, "repeats": n,
                          "steps": r.stats["steps"], "events": r.stats.get("events", 0), "nfev": r.stats["nfev"],
                          "eval_us": eval_us, "loop_overhead": overhead,
                          "reference": f"compiled RK45 rtol {T2_REF_RTOL:g}", "reference_rtol": T2_REF_RTOL,

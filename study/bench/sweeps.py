@@ -20,37 +20,35 @@ accurate, round-off sets a floor of ~1e-10 ... 1e-9 rad over 20 s (measured; see
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
-from study.bench.harness import inhouse_timer, log, max_dq, repeats_for, timer
-from study.bench.settings import (CASES, EPS, EXUDYN_ENGINES, EXUDYN_LEVELS, EXUDYN_REPEATS, EXUDYN_RUN_BUDGET, LEVELS,
-                                  MARGIN, OUTPUT_STEP, REF_CHECK_RTOLS, REF_RTOL, SWEEP_BUDGET)
+from study.bench.harness import at_setting, execute, log, max_dq, repeat_of, repeats_for, setting, timed, with_labels
+from study.bench.settings import (CASE_LIST, CASES, EXUDYN_ENGINES, EXUDYN_LEVELS, EXUDYN_REPEATS, EXUDYN_RUN_BUDGET,
+                                  LEVELS, MARGIN, OUTPUT_STEP, REF_RTOL, SWEEP_BUDGET, group)
+from study.pipeline import Case, MissingResult
+
+PYTHON_EXUDYN = "Exudyn (Python user functions)"   # run at the tuned sweep's steps, not swept
 
 
-def reference_with_check(mech: str, variant: str, t_end: float, extra: dict) -> tuple[object, float, list[dict]]:
-    """The reference run (compiled DOP853 at :data:`REF_RTOL`) and its estimated error.
+def plans(mech: str) -> list[tuple[str, str, list[Case]]]:
+    """The swept groups of a mechanism in list order: (engine, method, candidate cases).
 
-    Returns
-    -------
-    ref : SimulationResult
-    uncertainty : float
-        Largest max|Δq| between the reference and the runs at :data:`REF_CHECK_RTOLS` [rad].
-    rows : list of dict
-        One row per check run for ``references.csv``.
+    A group ``"<mech>: <engine>, <method>"`` of ``bench.toml``; Exudyn with Python user functions is
+    not swept (see :func:`sweep`), the reference groups are not plans.
     """
-    ref = inhouse_timer(mech, variant, t_end, extra, "compiled", "DOP853", REF_RTOL)()[1]
-    rows = []
-    for rtol in REF_CHECK_RTOLS:
-        check = inhouse_timer(mech, variant, t_end, extra, "compiled", "DOP853", rtol)()[1]
-        d = max_dq(check, ref)
-        rows.append({"mechanism": mech, "variant": variant, "t_end": t_end, "integrator": "DOP853 (compiled)",
-                     "reference_rtol": REF_RTOL, "reference_atol": REF_RTOL * 1e-2, "check_rtol": rtol,
-                     "check_atol": rtol * 1e-2, "max_abs_dq_check_vs_reference": d,
-                     "reference_steps": ref.stats["steps"], "check_steps": check.stats["steps"]})
-        log(f"reference {mech} {variant} {t_end:g} s: rtol {rtol:g} vs {REF_RTOL:g}: max|dq| {d:.2e}")
-    return ref, max(r["max_abs_dq_check_vs_reference"] for r in rows), rows
+    prefix, found = f"{mech}: ", {}
+    for case in CASE_LIST.cases:
+        if case.group.startswith(prefix) and ", " in case.group:
+            found.setdefault(case.group, []).append(case)
+    out = []
+    for name, cases in found.items():
+        engine, method = name[len(prefix):].rsplit(", ", 1)
+        if engine != PYTHON_EXUDYN:
+            out.append((engine, method, cases))
+    return out
 
 
 def order2_step(h: float, err: float, level: float, margin: float = MARGIN) -> float:
@@ -73,51 +71,47 @@ def order2_step(h: float, err: float, level: float, margin: float = MARGIN) -> f
     return OUTPUT_STEP / math.ceil(OUTPUT_STEP / predicted - 1e-9)
 
 
-def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
+def sweep(mech: str, quick: bool) -> list[Case]:
     """Work-precision runs of every engine/method on one mechanism (see the module docstring).
 
     Returns
     -------
-    runs : DataFrame
-        One row per run (setting, error, CPU, repeats, stage, note).
-    reference_rows : list of dict
-        The reference's check runs (``references.csv``).
+    list of Case
+        Every case run, in order: the mechanism's reference and its checks, each swept run (label
+        ``stage``) and its timing repeats; :func:`study.bench.summary.summarize` makes the tables.
     """
-    variant, t_end, extra = CASES[mech]
-    if quick:
-        t_end = 1.0
-    ref, ref_unc, ref_rows = reference_with_check(mech, variant, t_end, extra)
-    rows = []
-    rk_tols = [10.0 ** -k for k in range(4, 13)]
-    plans = [("in-house compiled", "DOP853", rk_tols), ("in-house compiled", "RK45", rk_tols),
-             ("in-house compiled", "RK4", [OUTPUT_STEP / 2 ** k for k in range(0, 9)]),
-             ("in-house reference", "DOP853", [10.0 ** -k for k in range(4, 11, 2)]),
-             ("Exudyn tuned", "index3", [OUTPUT_STEP / 2 ** k for k in range(0, 12)]),
-             ("Exudyn tuned", "index2", [OUTPUT_STEP / 2 ** k for k in range(0, 12)])]
+    t_end = 1.0 if quick else CASES[mech][1]
+    ref_case = replace(group(f"{mech}: reference")[0], t_end=t_end)
+    checks = [replace(c, t_end=t_end) for c in group(f"{mech}: reference check")]
+    ref = execute(ref_case)
+    for c in checks:
+        log(f"reference {mech} {ref_case.variant} {t_end:g} s: rtol {c.kwargs['rtol']:g} vs {REF_RTOL:g}: max|dq| "
+            f"{max_dq(execute(c), ref):.2e}")
+    executed = [ref_case, *checks]
+    rows, ran = [], []   # what the sweep decides by: one row per run, and its case (same index)
     budget = 2.0 if quick else SWEEP_BUDGET
-    friction = (f"{extra['friction']} friction, ε = {extra.get('friction_eps', EPS):g} m/s" if extra.get("friction")
-                else "")
     run_budget = 4.0 if quick else EXUDYN_RUN_BUDGET
 
-    def run_one(engine, method, setting, stage):
+    def run_one(engine, method, case, stage):
+        case = with_labels(case, stage=stage)
+        ran.append(case)
+        executed.append(case)
+        value = setting(case)
         try:
-            cpu, r = timer(mech, variant, t_end, extra, engine, method, setting)()
-        except Exception as exc:  # a failed setting is recorded, not hidden
-            log(f"(b) {mech} {engine} {method} {setting:g}: failed: {exc}")
-            rows.append({"mechanism": mech, "variant": variant, "friction": friction, "engine": engine, "method": method,
-                         "setting": setting, "error": np.nan, "cpu_s": np.nan, "repeats": 0, "stage": stage,
-                         "note": str(exc)[:200]})
+            cpu, r = timed(case, 1)
+        except MissingResult as exc:  # a failed setting is recorded (summary: a row with its error), not hidden
+            log(f"(b) {mech} {engine} {method} {value:g}: failed: {exc}")
+            rows.append({"engine": engine, "method": method, "setting": value, "error": np.nan, "cpu_s": np.nan,
+                         "repeats": 0})
             return np.nan, np.nan
         err = max_dq(r, ref)
-        rows.append({"mechanism": mech, "variant": variant, "friction": friction, "engine": engine, "method": method,
-                     "setting": setting, "error": err, "cpu_s": cpu, "repeats": 1, "stage": stage, "note": "",
-                     "nfev": r.stats.get("nfev", np.nan)})
-        log(f"(b) {mech} {engine} {method} setting {setting:.4g} ({stage}): max|dq| {err:.2e}, cpu {cpu:.4f} s")
+        rows.append({"engine": engine, "method": method, "setting": value, "error": err, "cpu_s": cpu, "repeats": 1})
+        log(f"(b) {mech} {engine} {method} setting {value:.4g} ({stage}): max|dq| {err:.2e}, cpu {cpu:.4f} s")
         return err, cpu
 
-    for engine, method, settings in plans:
-        for setting in settings:
-            err, cpu = run_one(engine, method, setting, "sweep")
+    for engine, method, candidates in plans(mech):
+        for case in candidates:
+            err, cpu = run_one(engine, method, replace(case, t_end=t_end), "sweep")
             if err <= LEVELS[-1] * 0.5 or cpu > budget:
                 break
         if engine not in EXUDYN_ENGINES:
@@ -136,7 +130,8 @@ def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
                     break
                 log(f"(b) {mech} {engine} {method}: order-2 step for {level:g}: h = {h:.4g} s (predicted "
                     f"{predicted:.1f} s)")
-                err, _ = run_one(engine, method, h, f"order-2 step for {level:g}")
+                case = at_setting(replace(candidates[0], t_end=t_end), h)
+                err, _ = run_one(engine, method, case, f"order-2 step for {level:g}")
                 if not np.isfinite(err):
                     break  # the solver fails at this step: recorded, no retry
     # Exudyn with Python user functions solves the same discrete equations as the tuned configuration
@@ -150,8 +145,9 @@ def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
             ok = tuned[tuned.error <= level]
             if len(ok):
                 picks.add(float(ok.loc[ok.cpu_s.idxmin(), "setting"]))
+        template = replace(group(f"{mech}: {PYTHON_EXUDYN}, {method}")[0], t_end=t_end)
         for h in sorted(picks, reverse=True):
-            run_one("Exudyn (Python user functions)", method, h, "steps of the tuned sweep")
+            run_one(PYTHON_EXUDYN, method, at_setting(template, h), "steps of the tuned sweep")
     df = pd.DataFrame(rows)
     # medians for the cheapest setting reaching each level
     for level in LEVELS:
@@ -165,12 +161,8 @@ def sweep(mech: str, quick: bool) -> tuple[pd.DataFrame, list[dict]]:
             want = max(want, EXUDYN_REPEATS) if engine in EXUDYN_ENGINES else want
             if df.at[i, "repeats"] >= want:
                 continue
-            fn = timer(mech, variant, t_end, extra, engine, method, s.setting)
-            more = [fn()[0] for _ in range(want - int(s.repeats))]
-            df.at[i, "cpu_s"] = float(np.median([s.cpu_s] + more))
+            df.at[i, "cpu_s"] = timed(ran[i], want)[0]   # the run's first timing and want - 1 more
             df.at[i, "repeats"] = want
+            executed += [repeat_of(ran[i], k) for k in range(1, want)]
             log(f"(b) {mech} {engine} {method} setting {s.setting:.4g}: median of {want}: {df.at[i, 'cpu_s']:.4f} s")
-    df["t_end"] = t_end
-    df["reference"] = f"compiled DOP853 rtol {REF_RTOL:g}, atol {REF_RTOL * 1e-2:g}"
-    df["reference_uncertainty"] = ref_unc
-    return df, ref_rows
+    return executed

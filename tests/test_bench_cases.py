@@ -1,0 +1,143 @@
+"""The benchmark's runs as a case list (reference/cases/bench.toml) and its summary.
+
+The case list is standalone: the pipeline's run, reproduce, verify and the report leave it out. Its
+summary is checked on hand-made saved results (errors, medians and counts worked out by hand); the
+harness's pipeline path on a short reference-path run (saved once, reused, repeats kept apart).
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import study.pipeline as pl
+from study.bench import harness
+from study.bench.settings import CASE_LIST, CASES, T2_RTOLS, group
+from study.bench.summary import summarize
+from study.bench.sweeps import plans
+from study.results import SimulationResult
+
+
+# --- the case list -------------------------------------------------------------------------------
+def test_bench_list_is_left_out_of_the_studies_and_refused_by_name(tmp_path):
+    assert "bench" not in {cl.study for cl in pl.load_case_lists()}
+    with pytest.raises(pl.CaseListError, match="standalone.*study run, reproduce and verify leave them out"):
+        pl.load_case_lists(studies=["bench"])
+    with pytest.raises(pl.CaseListError, match="standalone"):
+        pl.run_pipeline(tmp_path / "reports", tmp_path / "cache", studies=["bench"], workers=1)
+    assert CASE_LIST.standalone and CASE_LIST.summary == "study.bench.summary"
+    assert pl.summary_function(CASE_LIST) is summarize
+
+
+def test_standalone_must_be_a_reason(tmp_path):
+    path = tmp_path / "b.toml"
+    path.write_text('[study]\nsummary = "x"\nstandalone = true\n[[group]]\nname = "g"\nmechanism = "quick_return"\n'
+                    't_end = 1.0\n')
+    with pytest.raises(pl.CaseListError, match="standalone = True must be the reason"):
+        pl.load_case_list(path)
+
+
+def test_bench_list_holds_the_documented_plans():
+    """Against the benchmark's description (study/bench/sweeps.py, issue 7), typed here by hand."""
+    assert CASES == {"quick_return": ("smooth_cutting", 5.0, {}),
+                     "slider_crank": ("sustained_sliding", 20.0, {"friction": "regularized", "friction_eps": 1e-3}),
+                     "four_bar": ("seed", 5.0, {})}
+    got = [(engine, method, len(cases)) for engine, method, cases in plans("slider_crank")]
+    assert got == [("in-house compiled", "DOP853", 9), ("in-house compiled", "RK45", 9), ("in-house compiled", "RK4", 9),
+                   ("in-house reference", "DOP853", 4), ("Exudyn tuned", "index3", 12), ("Exudyn tuned", "index2", 12)]
+    rk4 = plans("four_bar")[2][2]
+    assert [c.kwargs["step"] for c in rk4] == [0.01 / 2 ** k for k in range(9)]
+    dop = plans("four_bar")[0][2]
+    assert [(c.kwargs["rtol"], c.kwargs["atol"]) for c in dop] == [(10.0 ** -k, 10.0 ** -(k + 2)) for k in range(4, 13)]
+    exu = plans("slider_crank")[4][2][0].kwargs
+    assert (exu["h"], exu["configuration"], exu["friction"], exu["eps"]) == (0.01, "tuned", "regularized", 1e-3)
+    assert T2_RTOLS == (1e-10, 1e-11, 1e-12, 1e-13, 1e-14)
+    scaling = [(c.kwargs["backend"], c.t_end) for c in group("scaling: simulated time")]
+    assert scaling == [("compiled", 1.0), ("compiled", 5.0), ("compiled", 20.0), ("compiled", 100.0),
+                       ("reference", 1.0), ("reference", 5.0)]
+
+
+def test_repeat_and_setting_change_the_key_not_the_run():
+    case = plans("quick_return")[0][2][0]
+    again = harness.repeat_of(case, 2)
+    assert again.key() != case.key() and harness.repeat_of(case, 0) == case
+    assert again.kwargs["repeat"] == 2 and again.label("repeat") == "2"
+    assert harness.with_labels(case, stage="sweep").key() == case.key()
+    moved = harness.at_setting(case, 1e-7)
+    assert (moved.kwargs["rtol"], moved.kwargs["atol"], moved.label("setting")) == (1e-7, 1e-9, "1e-07")
+    exu = harness.at_setting(plans("quick_return")[4][2][0], 0.01 / 3)
+    assert exu.kwargs["h"] == 0.01 / 3 and harness.setting(exu) == 0.01 / 3
+
+
+def test_timed_runs_go_through_the_store_once(tmp_path, monkeypatch):
+    """Two timings are two saved runs with the same trajectory; asking again computes nothing."""
+    monkeypatch.setenv("STUDY_CACHE_DIR", str(tmp_path))
+    case = harness.inhouse_case("quick_return", "seed", 0.05, {}, "reference", "RK45", 1e-6, "test")
+    cpu, result = harness.timed(case, 2)
+    store = harness.bench_store()
+    assert store.root == tmp_path / "bench_runs"
+    assert store.has(case) and store.has(harness.repeat_of(case, 1))
+    cpus = [store.load(harness.repeat_of(case, k)).stats["cpu_seconds"] for k in (0, 1)]
+    assert cpu == pytest.approx(np.median(cpus))
+    assert np.array_equal(store.load(case).q, result.q)
+    stamps = sorted(p.stat().st_mtime_ns for p in store.root.glob("*.json"))
+    assert harness.timed(case, 2)[0] == cpu
+    assert sorted(p.stat().st_mtime_ns for p in store.root.glob("*.json")) == stamps
+
+
+# --- the summary on hand-made saved results ----------------------------------------------------------
+def _result(q_first_coordinate, cpu, engine="inhouse", nfev=100, steps=40):
+    q = np.zeros((3, 2))
+    q[:, 0] = q_first_coordinate
+    zeros = np.zeros((3, 1))
+    stats = {"steps": steps, "nfev": nfev, ("process_cpu_seconds" if engine == "exudyn" else "cpu_seconds"): cpu}
+    return SimulationResult(t=np.array([0.0, 0.5, 1.0]), q=q, qd=np.zeros((3, 2)), qdd=np.zeros((3, 2)), lam=zeros,
+                            phi=zeros, phidot=zeros, stats=stats)
+
+
+def test_summary_from_hand_made_saved_results():
+    reference = group("slider_crank: reference")[0]
+    check = group("slider_crank: reference check")[0]
+    dop, dop_fine = plans("slider_crank")[0][2][:2]
+    exu = plans("slider_crank")[4][2][0]
+    run = harness.with_labels(dop, stage="sweep")
+    fine = harness.with_labels(dop_fine, stage="sweep")
+    step = harness.with_labels(harness.at_setting(exu, 0.01 / 3), stage="order-2 step for 1e-06")
+    saved = {reference: _result([1.0, 2.0, 3.0], 9.0),
+             check: _result([1.0, 2.0, 3.0 + 4e-10], 9.5),
+             run: _result([1.0, 2.0 + 3e-4, 3.0 - 5e-4], 0.30, nfev=120),
+             harness.repeat_of(run, 1): _result([1.0, 2.0 + 3e-4, 3.0 - 5e-4], 0.10),
+             harness.repeat_of(run, 2): _result([1.0, 2.0 + 3e-4, 3.0 - 5e-4], 0.20),
+             step: _result([1.0, 2.0, 3.0 + 2e-6], 7.0, engine="exudyn")}
+
+    def load(case):
+        for known, result in saved.items():
+            if known.key() == case.key():
+                return result
+        raise pl.MissingResult(f"no saved result for case {case.name} (it failed: SolverError: step too small)")
+
+    listed = [reference, check, run, fine, step, harness.repeat_of(run, 1), harness.repeat_of(run, 2),
+              harness.repeat_of(run, 2)]   # a repeat listed twice counts once
+    tables = summarize(listed, load)
+    refs = tables["references"]
+    assert len(refs) == 1 and refs.max_abs_dq_check_vs_reference.iloc[0] == pytest.approx(4e-10, rel=1e-6)
+    assert (refs.reference_rtol.iloc[0], refs.check_rtol.iloc[0]) == (5e-15, 1e-14)
+    wp = tables["work_precision"]
+    assert list(wp.columns) == ["mechanism", "variant", "friction", "engine", "method", "setting", "error", "cpu_s",
+                                "repeats", "stage", "note", "nfev", "t_end", "reference", "reference_uncertainty"]
+    assert list(wp.engine) == ["in-house compiled", "in-house compiled", "Exudyn tuned"]
+    first, failed, order2 = (wp.iloc[i] for i in range(3))
+    assert first.error == pytest.approx(5e-4, rel=1e-9) and first.cpu_s == pytest.approx(0.20)  # median(0.3, 0.1, 0.2)
+    assert (first.repeats, first.setting, first.nfev, first.method) == (3, 1e-4, 120, "DOP853")
+    assert first.friction == "regularized friction, ε = 0.001 m/s" and first.t_end == 20.0
+    assert first.reference == "compiled DOP853 rtol 5e-15, atol 5e-17"
+    assert first.reference_uncertainty == pytest.approx(4e-10, rel=1e-6)
+    assert np.isnan(failed.error) and failed.repeats == 0 and "SolverError: step too small" in failed.note
+    assert order2.setting == 0.01 / 3 and order2.stage == "order-2 step for 1e-06"
+    assert (order2.cpu_s, order2.repeats) == (7.0, 1) and order2.error == pytest.approx(2e-6, rel=1e-6)
+
+
+def test_summary_needs_the_reference_of_each_run():
+    run = harness.with_labels(plans("four_bar")[0][2][0], stage="sweep")
+    with pytest.raises(LookupError, match="no reference of four_bar over 5 s"):
+        summarize([run], lambda case: _result([0.0] * 3, 1.0))
+    assert isinstance(summarize([], lambda case: None)["work_precision"], pd.DataFrame)
