@@ -116,7 +116,8 @@ def test_report_outputs_are_written_atomically(tmp_path, saved, monkeypatch):
     from study.integrity import atomic_write
 
     written = []
-    monkeypatch.setattr(report, "atomic_write", lambda path, text: written.append(Path(path).name) or atomic_write(path, text))
+    monkeypatch.setattr(report, "atomic_write",
+                        lambda path, text: written.append(Path(path).name) or atomic_write(path, text))
     out = tmp_path / "reports"
     build_report(out, tmp_path / "empty_cache", saved[2])
     assert {"index.md", "report.html", "manifest.json", "report_timing.csv"} <= set(written)

@@ -4,8 +4,8 @@ Every run of the benchmark is a case (``reference/cases/bench.toml``, or one bui
 :func:`inhouse_case` / :func:`at_setting` for a setting the list cannot hold in advance) run
 through the pipeline's store (:func:`execute`: cached, checked on every read, in this process, one at
 a time); its k-th timing is the case with option ``repeat = k`` (:func:`repeat_of`). CPU times are
-``time.process_time`` of the integration only (in-house: ``stats['cpu_seconds']``; Exudyn: the process time around its ``SolveDynamic``), medians of :data:`~study.bench.settings.REPEATS`
-runs; runs longer than :data:`~study.bench.settings.LONG_RUN` s are repeated fewer times
+``time.process_time`` of the integration only (in-house: ``stats['cpu_seconds']``; Exudyn: the process
+time around its ``SolveDynamic``), medians of :data:`~study.bench.settings.REPEATS` runs; runs longer than :data:`~study.bench.settings.LONG_RUN` s are repeated fewer times
 (:func:`repeats_for`, at least once); every table row records its repeats.
 """
 
@@ -41,7 +41,8 @@ def machine() -> dict:
 
 
 def repeats_for(cpu: float, quick: bool = False) -> int:
-    """Timings of a run that took ``cpu`` seconds once: :func:`~study.bench.settings.repeats`, fewer (>= 1) for long runs.
+    """Timings of a run that took ``cpu`` seconds once: :func:`~study.bench.settings.repeats`, fewer (>= 1)
+    for long runs.
 
     Parameters
     ----------

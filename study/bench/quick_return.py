@@ -36,12 +36,14 @@ def independent_reference(variant: str, t_end: float) -> tuple[object, float, di
 
 
 def quick_return_20s(quick: bool) -> tuple[pd.DataFrame, list[dict]]:
-    """Compiled DOP853 over the rtol grid of ``"quick_return 20 s: DOP853"`` (decades) on the 20 s quick-return, smooth and on/off
-    cutting laws, each against :func:`independent_reference`, with the loop overhead of every run.
+    """Compiled DOP853 over the rtol grid of ``"quick_return 20 s: DOP853"`` (decades) on the 20 s
+    quick-return, smooth and on/off cutting laws, each against :func:`independent_reference`, with the
+    loop overhead of every run.
 
     Every candidate is timed :func:`~study.bench.settings.repeats` times (runs of ~0.1 s). The loop
-    overhead is the run's CPU divided by (its evaluations × the cost of one evaluation, :func:`eval_cost_us`, timed in the same
-    process right before the runs).
+    overhead is the run's CPU divided by (its evaluations × the cost of one evaluation,
+    :func:`eval_cost_us`, timed in the same process right before the runs; a run saved by an earlier
+    benchmark of the same code keeps its CPU: ``--remeasure`` times everything in one process).
 
     Returns
     -------

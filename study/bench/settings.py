@@ -53,7 +53,8 @@ MARGIN = 0.8  # aim the order-2 prediction at MARGIN * level
 EXUDYN_ENGINES = {"Exudyn tuned": "tuned", "Exudyn (Python user functions)": "python"}
 EXUDYN_REPEATS = 3  # every Exudyn run that enters a ratio is timed at least this often (median)
 #: Mechanism -> (variant, horizon [s], friction options) of the work-precision sweeps: their reference runs.
-CASES = {c.mechanism: (c.variant, c.t_end, _extra(c)) for c in CASE_LIST.cases if c.group == f"{c.mechanism}: reference"}
+CASES = {c.mechanism: (c.variant, c.t_end, _extra(c))
+         for c in CASE_LIST.cases if c.group == f"{c.mechanism}: reference"}
 REF_RTOL = group(f"{next(iter(CASES))}: reference")[0].kwargs["rtol"]
 REF_CHECK_RTOLS = tuple(c.kwargs["rtol"] for c in group(f"{next(iter(CASES))}: reference check"))
 T2_LEVEL = 1e-8
