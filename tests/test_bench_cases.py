@@ -6,7 +6,6 @@ harness's pipeline path on a short reference-path run (saved once, reused, repea
 """
 
 import numpy as np
-import pandas as pd
 import pytest
 
 import study.pipeline as pl
@@ -139,6 +138,41 @@ def test_summary_from_hand_made_saved_results():
 
 def test_summary_needs_the_reference_of_each_run():
     run = harness.with_labels(plans("four_bar")[0][2][0], stage="sweep")
-    with pytest.raises(LookupError, match="no reference of four_bar over 5 s"):
+    with pytest.raises(LookupError, match="no reference 'four_bar: reference' of variant seed over 5 s"):
         summarize([run], lambda case: _result([0.0] * 3, 1.0))
-    assert isinstance(summarize([], lambda case: None)["work_precision"], pd.DataFrame)
+    assert summarize([], lambda case: None) == {}
+
+
+def test_summary_of_the_20s_quick_return_and_the_scaling_runs():
+    """Each run is measured against the reference of its own variant; medians and counts by hand."""
+    ref = {c.variant: c for c in group("quick_return 20 s: reference")}
+    check = {c.variant: c for c in group("quick_return 20 s: reference check")}
+    runs = group("quick_return 20 s: DOP853")
+    seed_run = next(c for c in runs if c.variant == "seed" and c.kwargs["rtol"] == 1e-12)
+    smooth_run = next(c for c in runs if c.variant == "smooth_cutting" and c.kwargs["rtol"] == 1e-13)
+    compiled_5s, reference_1s = group("scaling: simulated time")[1], group("scaling: simulated time")[4]
+    saved = {ref["seed"]: _result([0.0, 1.0, 2.0], 1.0), check["seed"]: _result([0.0, 1.0, 2.0 + 2e-10], 1.0),
+             ref["smooth_cutting"]: _result([5.0, 5.0, 5.0], 1.0),
+             check["smooth_cutting"]: _result([5.0, 5.0 - 7e-10, 5.0], 1.0),
+             seed_run: _result([0.0, 1.0 + 3e-9, 2.0], 0.4, nfev=900),
+             harness.repeat_of(seed_run, 1): _result([0.0, 1.0 + 3e-9, 2.0], 0.1),
+             smooth_run: _result([5.0, 5.0, 5.0 + 1e-8], 0.25),
+             compiled_5s: _result([0.0] * 3, 0.05, steps=870),
+             harness.repeat_of(compiled_5s, 1): _result([0.0] * 3, 0.07),
+             harness.repeat_of(compiled_5s, 2): _result([0.0] * 3, 0.02), reference_1s: _result([0.0] * 3, 0.5)}
+    tables = summarize(list(saved), lambda case: saved[case])
+    qr = tables["quick_return_20s"].set_index("variant")
+    assert qr.loc["seed", "error"] == pytest.approx(3e-9, rel=1e-6) and qr.loc["seed", "cpu_s"] == pytest.approx(0.25)
+    assert (qr.loc["seed", "repeats"], qr.loc["seed", "nfev"], qr.loc["seed", "rtol"]) == (2, 900, 1e-12)
+    assert qr.loc["seed", "reference_uncertainty"] == pytest.approx(2e-10, rel=1e-6)
+    assert qr.loc["smooth_cutting", "error"] == pytest.approx(1e-8, rel=1e-6)
+    assert qr.loc["smooth_cutting", "reference_uncertainty"] == pytest.approx(7e-10, rel=1e-6)
+    assert qr.loc["smooth_cutting", "reference"] == "compiled RK45 rtol 1e-14"
+    assert qr.loc["smooth_cutting", "integrator"] == "DOP853 (compiled)"
+    refs = tables["references"]
+    assert list(refs.integrator) == ["RK45 (compiled)"] * 2 and list(refs.check_rtol) == [5e-15, 5e-15]
+    scaling = tables["scaling_simulated_time"]
+    assert list(scaling.backend) == ["compiled", "reference"] and list(scaling.t_end) == [5.0, 1.0]
+    assert list(scaling.cpu_s) == pytest.approx([0.05, 0.5]) and list(scaling.repeats) == [3, 1]  # median(.05,.07,.02)
+    assert list(scaling.cpu_per_simulated_s) == pytest.approx([0.01, 0.5]) and scaling.steps.iloc[0] == 870
+    assert "work_precision" not in tables

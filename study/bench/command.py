@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         old = saved("references.csv") if (out / "references.csv").exists() else pd.DataFrame()
         keep = [] if old.empty else [old[old.t_end == (2.0 if args.quick else T2_T_END)] if "qr20" not in only
                                      else old[old.t_end != (2.0 if args.quick else T2_T_END)]]
-        new = ([sweep_refs] if "sweep" in only else []) + ([pd.DataFrame(qr_refs)] if "qr20" in only else [])
+        new = ([sweep_refs] if "sweep" in only else []) + ([qr_refs] if "qr20" in only else [])
         write_csv(pd.concat([*keep, *new], ignore_index=True), out / "references.csv")
     if "scaling" in only:
         time_df, density_df, mem_df = scaling(args.quick)

@@ -12,7 +12,8 @@ import tracemalloc
 
 import pandas as pd
 
-from study.bench.harness import log, median_cpu, timed
+from study.bench.harness import bench_store, log, median_cpu, repeat_of, timed
+from study.bench.summary import summarize
 from study.bench.settings import EPS, LINEAR_REPEATS, OUTPUT_STEP, group, repeats
 from study.simulate import simulate
 
@@ -23,17 +24,15 @@ def scaling(quick: bool) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     from study.mechanisms import initial_state, load
 
     few = repeats(quick)
-    rows = []
+    executed = []
     for case in group("scaling: simulated time"):   # the compiled path, then the reference path up to 5 s
         backend, t_end = case.kwargs["backend"], case.t_end
         if quick and t_end > 5:
             continue
         n = LINEAR_REPEATS if backend == "compiled" else few
-        cpu, r = timed(case, n)
-        rows.append({"backend": backend, "t_end": t_end, "cpu_s": cpu, "steps": r.stats["steps"],
-                     "cpu_per_simulated_s": cpu / t_end, "repeats": n})
-        log(f"(d) {backend} t_end {t_end}: {cpu:.4f} s")
-    time_df = pd.DataFrame(rows)
+        log(f"(d) {backend} t_end {t_end}: {timed(case, n)[0]:.4f} s")
+        executed += [repeat_of(case, k) for k in range(n)]
+    time_df = summarize(executed, bench_store().load)["scaling_simulated_time"]
 
     ps, eom = load("quick_return", "smooth_cutting")
     st = initial_state(ps, eom)
