@@ -176,3 +176,62 @@ def test_summary_of_the_20s_quick_return_and_the_scaling_runs():
     assert list(scaling.cpu_s) == pytest.approx([0.05, 0.5]) and list(scaling.repeats) == [3, 1]  # median(.05,.07,.02)
     assert list(scaling.cpu_per_simulated_s) == pytest.approx([0.01, 0.5]) and scaling.steps.iloc[0] == 870
     assert "work_precision" not in tables
+
+
+# --- the quick sweep end to end, on a tiny case list ------------------------------------------------------
+TINY_BENCH = """
+[study]
+summary = "study.bench.summary"
+standalone = "test"
+
+[[group]]
+name = "quick_return: reference"
+mechanism = "quick_return"
+t_end = 1.0
+options = { backend = "reference", integrator = "DOP853", rtol = 1e-10, atol = 1e-12, output_step = 0.01 }
+
+[[group]]
+name = "quick_return: reference check"
+mechanism = "quick_return"
+t_end = 1.0
+options = { backend = "reference", integrator = "DOP853", rtol = 1e-9, atol = 1e-11, output_step = 0.01 }
+
+[[group]]
+name = "quick_return: in-house reference, DOP853"
+mechanism = "quick_return"
+t_end = 1.0
+options = { backend = "reference", integrator = "DOP853", output_step = 0.01 }
+sweep.setting = [{ label = "1e-4", rtol = 1e-4, atol = 1e-6 }, { label = "1e-7", rtol = 1e-7, atol = 1e-9 }]
+"""
+
+
+def test_quick_sweep_runs_through_the_pipeline_and_its_summary(tmp_path, monkeypatch):
+    """The quick path of one mechanism's sweep on a tiny list: every run and repeat saved in the store,
+    the tables made from them, and a second sweep computes nothing."""
+    from study.bench import settings, sweeps
+
+    path = tmp_path / "bench.toml"
+    path.write_text(TINY_BENCH)
+    tiny = pl.load_case_list(path)
+    monkeypatch.setenv("STUDY_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(settings, "CASE_LIST", tiny)
+    monkeypatch.setattr(sweeps, "CASE_LIST", tiny)
+    monkeypatch.setattr(sweeps, "CASES", {"quick_return": ("seed", 1.0, {})})
+    executed = sweeps.sweep("quick_return", quick=True)
+    store = harness.bench_store()
+    assert all(store.has(c) for c in executed)
+    groups = [c.group for c in executed if "repeat" not in c.kwargs]
+    assert groups == ["quick_return: reference", "quick_return: reference check"] + [
+        "quick_return: in-house reference, DOP853"] * 2
+    tables = summarize(executed, store.load)
+    wp = tables["work_precision"]
+    assert list(wp.setting) == [1e-4, 1e-7] and list(wp.stage) == ["sweep", "sweep"]
+    assert wp.error.iloc[1] < wp.error.iloc[0] and (wp.error > 0).all()
+    # the cheapest run reaching a level is timed repeats(quick) = 2 times (a second case), the others once
+    boosted = {c.kwargs["rtol"] for c in executed if "repeat" in c.kwargs}
+    assert boosted and all(wp.error[wp.setting == rtol].iloc[0] <= 1e-4 for rtol in boosted)
+    assert list(wp.repeats) == [2 if rtol in boosted else 1 for rtol in wp.setting]
+    assert len(tables["references"]) == 1
+    stamps = sorted(p.stat().st_mtime_ns for p in store.root.glob("*.json"))
+    assert sweeps.sweep("quick_return", quick=True) == executed
+    assert sorted(p.stat().st_mtime_ns for p in store.root.glob("*.json")) == stamps

@@ -145,8 +145,8 @@ def sweep(mech: str, quick: bool) -> list[Case]:
             ok = tuned[tuned.error <= level]
             if len(ok):
                 picks.add(float(ok.loc[ok.cpu_s.idxmin(), "setting"]))
-        template = replace(group(f"{mech}: {PYTHON_EXUDYN}, {method}")[0], t_end=t_end)
         for h in sorted(picks, reverse=True):
+            template = replace(group(f"{mech}: {PYTHON_EXUDYN}, {method}")[0], t_end=t_end)
             run_one(PYTHON_EXUDYN, method, at_setting(template, h), "steps of the tuned sweep")
     df = pd.DataFrame(rows)
     # medians for the cheapest setting reaching each level
