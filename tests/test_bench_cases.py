@@ -2,7 +2,8 @@
 
 The case list is standalone: the pipeline's run, reproduce, verify and the report leave it out. Its
 summary is checked on hand-made saved results (errors, medians and counts worked out by hand); the
-harness's pipeline path on a short reference-path run (saved once, reused, repeats kept apart).
+harness's pipeline path on a short reference-path run (saved once, reused, repeats kept apart), and the
+quick sweep of one mechanism end to end on a tiny case list.
 """
 
 import numpy as np

@@ -12,6 +12,10 @@ configurations (:data:`~study.bench.settings.EXUDYN_ENGINES`): 'tuned' (swept as
 functions' (run at the steps the tuned sweep chose: both solve the same discrete equations). Every
 Exudyn run entering a ratio is timed at least :data:`~study.bench.settings.EXUDYN_REPEATS` times.
 
+The candidates are the groups ``"<mechanism>: <engine>, <method>"`` of ``reference/cases/bench.toml``
+(:func:`plans`), walked in list order; every run and timing repeat is a case run through the
+pipeline's store (:mod:`study.bench.harness`), and :mod:`study.bench.summary` makes the tables.
+
 References: compiled DOP853 at rtol :data:`~study.bench.settings.REF_RTOL` (atol = rtol/100), checked by
 :data:`~study.bench.settings.REF_CHECK_RTOLS` runs (``references.csv``): tighter tolerances are not more
 accurate, round-off sets a floor of ~1e-10 ... 1e-9 rad over 20 s (measured; see the CSV).
