@@ -119,7 +119,7 @@ def _describe(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from study.bench import run
+    from study.bench.command import run
 
     return run(args)
 
@@ -323,7 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variant", "--case", dest="variant", default="seed", help="parameter-set variant (default: seed)")
     p.set_defaults(func=_describe)
 
-    from study.bench import add_arguments as bench_arguments
+    from study.bench.command import add_arguments as bench_arguments
 
     p = sub.add_parser("bench", help="benchmark: accuracy per CPU second, in-house vs Exudyn (same as "
                                      "python -m study.bench)")

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from study.integrity import atomic_write
 from study.mechanisms import initial_state, load
 from study.params import available_mechanisms
 from study.solver.initial import constraint_residuals
@@ -41,5 +42,5 @@ def initial_conditions_table() -> pd.DataFrame:
 def write_initial_conditions(out_dir: Path) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "initial_conditions.csv"
-    initial_conditions_table().to_csv(path, index=False, float_format="%.10g")
+    atomic_write(path, initial_conditions_table().to_csv(index=False, float_format="%.10g", lineterminator="\n"))
     return path

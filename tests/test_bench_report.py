@@ -10,7 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from study.bench import THRESHOLDS, cheapest, evaluate_targets, order2_step, ratios, repeats_for
+from study.bench.accuracy import cheapest, ratios
+from study.bench.harness import repeats_for
+from study.bench.sweeps import order2_step
+from study.bench.targets import THRESHOLDS, evaluate_targets
 from study.report.context import ReportContext
 from study.report.render import fmt_number
 from study.report.sections import benchmarks

@@ -124,12 +124,12 @@ def test_every_command_help_shows_an_example(capsys):
 
 def test_bench_subcommand_runs_the_benchmark(monkeypatch, tmp_path):
     """`study bench` parses the benchmark's own options and runs it (python -m study.bench does the same)."""
-    import study.bench
+    from study.bench import command
 
     seen = []
-    monkeypatch.setattr(study.bench, "run", lambda args: seen.append(args) or 0)
+    monkeypatch.setattr(command, "run", lambda args: seen.append(args) or 0)
     assert main(["bench", "--quick", "--skip-compile", "--out", str(tmp_path)]) == 0
-    assert study.bench.main(["--quick", "--out", str(tmp_path)]) == 0
+    assert command.main(["--quick", "--out", str(tmp_path)]) == 0
     assert [(a.quick, a.skip_compile, a.out) for a in seen] == [(True, True, tmp_path), (True, False, tmp_path)]
 
 

@@ -150,7 +150,7 @@ def test_generated_code_is_cached(tmp_path, monkeypatch):
     calls = []
     real = comp.derive
     monkeypatch.setattr(comp, "derive", lambda b: calls.append(1) or real(b))
-    builder(ps).compile()
-    builder(ps).compile()
+    comp.compile_description(builder(ps))
+    comp.compile_description(builder(ps))
     assert len(calls) == 1
     assert len(list((tmp_path / "codegen").glob("quick_return_*.py"))) == 1

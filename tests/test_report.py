@@ -5,6 +5,7 @@ import hashlib
 import json
 import os
 import re
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -104,6 +105,27 @@ def test_report_without_saved_runs(tmp_path, saved):
     text = build_report(tmp_path / "reports", tmp_path / "empty_cache", cases).read_text()
     assert "No saved runs found" in text and "initial_conditions.csv` is missing" in text
     assert (tmp_path / "reports" / "manifest.json").exists()
+
+
+def test_report_outputs_are_written_atomically(tmp_path, saved, monkeypatch):
+    """index.md, report.html and manifest.json go through the one atomic writer (temporary file, rename):
+    each is written by it, none is left as a temporary file, and each gets open()'s usual mode."""
+    import stat
+
+    import study.report as report
+    from study.integrity import atomic_write
+
+    written = []
+    monkeypatch.setattr(report, "atomic_write",
+                        lambda path, text: written.append(Path(path).name) or atomic_write(path, text))
+    out = tmp_path / "reports"
+    build_report(out, tmp_path / "empty_cache", saved[2])
+    assert {"index.md", "report.html", "manifest.json", "report_timing.csv"} <= set(written)
+    assert not list(out.rglob("*.tmp"))
+    mask = os.umask(0o022)
+    os.umask(mask)
+    for name in ("index.md", "report.html", "manifest.json"):
+        assert stat.S_IMODE((out / name).stat().st_mode) == 0o666 & ~mask, name
 
 
 def test_markdown_to_html_subset():

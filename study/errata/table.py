@@ -80,9 +80,9 @@ def write_errata(out_dir: Path) -> Path:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     df = errata_table()
-    df.to_csv(out_dir / "errata.csv", index=False, lineterminator="\n")
+    atomic_write(out_dir / "errata.csv", df.to_csv(index=False, lineterminator="\n"))
     md = out_dir / "errata.md"
-    md.write_text(errata_markdown(df), encoding="utf-8")
+    atomic_write(md, errata_markdown(df))
     return md
 
 

@@ -16,6 +16,7 @@ import sympy as sp
 
 from study.model import EquationsOfMotion
 from study.model.builder import MechanismBuilder
+from study.model.compile import compile_description
 from study.model.coordinates import COORDINATE_SETS, lower
 from study.model.joints import Description
 from study.params import ParameterSet, available_mechanisms, load_parameters
@@ -75,7 +76,7 @@ def equations(ps: ParameterSet, coordinates: str = "relative") -> EquationsOfMot
         raise ValueError(f"unknown coordinate set {coordinates!r}; valid choices: {', '.join(COORDINATE_SETS)}")
     key = (ps.mechanism, ps.values, coordinates)   # the values themselves: a replaced set keeps its sha256
     if key not in _EQUATIONS:
-        _EQUATIONS[key] = builder(ps, coordinates).compile(ps.sha256)
+        _EQUATIONS[key] = compile_description(builder(ps, coordinates), ps.sha256)
     return _EQUATIONS[key]
 
 

@@ -74,7 +74,7 @@ class Contact:
 
 
 class MechanismBuilder:
-    """Collect a planar mechanism's description, then :meth:`compile` it.
+    """Collect a planar mechanism's description (compiled by :func:`study.model.compile.compile_description`).
 
     Parameters
     ----------
@@ -163,7 +163,7 @@ class MechanismBuilder:
         self.contacts.append(c)
         return c
 
-    # --- checks and compilation -------------------------------------------------------------
+    # --- checks -------------------------------------------------------------
     def validate(self) -> None:
         """Report every problem of the description in one DescriptionError."""
         problems = []
@@ -203,15 +203,3 @@ class MechanismBuilder:
             problems.append("no bodies")
         if problems:
             raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
-
-    def compile(self, parameter_hash: str = ""):
-        """Derive the symbolic equations, generate and cache numeric code, bind parameters.
-
-        Returns
-        -------
-        study.model.EquationsOfMotion
-        """
-        from study.model.compile import compile_description  # local: compile imports this module
-
-        self.validate()
-        return compile_description(self, parameter_hash)

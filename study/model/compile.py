@@ -147,7 +147,8 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
 
 
 def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> EquationsOfMotion:
-    """Bind a description's generated code to its numeric parameters -> EquationsOfMotion."""
+    """Validate a description, bind its generated code to its numeric parameters -> EquationsOfMotion."""
+    b.validate()
     module = generated_module(b)
     p = [float(b.values[k]) for k in module.PARAMETERS]
     f = module.bind(p)

@@ -8,6 +8,9 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     section = "sliding_mode"                    # optional: its report section (study.report.sections.<name>)
     section_order = 40                          # ... and that section's place in the report (a number;
                                                 # study.report.FIXED_SECTIONS places the others)
+    standalone = "why"                          # optional: a list only its own command runs (the
+                                                # benchmark); load_case_lists leaves it out unless
+                                                # named, and run, reproduce and verify refuse it
 
     [[group]]
     name = "reference"                          # readable, unique within the study
@@ -33,7 +36,8 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
 
 Options are the keyword arguments of :func:`study.simulate.simulate` (engine 'inhouse'; plus
 ``initial = "printed"`` to start from the paper's printed state instead of the consistent one) or of
-:func:`study.exudyn_models.run` (engine 'exudyn', e.g. ``h``, ``solver``).
+:func:`study.exudyn_models.run` (engine 'exudyn', e.g. ``h``, ``solver``); either engine also takes
+``repeat = k``: the same run once more (a benchmark's k-th timing), a key of its own, the same result.
 
 A case's key (:meth:`Case.key`) is built in :mod:`study.pipeline.keys`.
 """
@@ -156,6 +160,7 @@ class CaseList:
     samples: tuple[tuple[Case, Case], ...] = ()   # (compiled case, its reference-path twin), see reference_sample
     section: str | None = None           # its report section (a module of study.report.sections), if it has one
     section_order: float | None = None   # that section's place in the report (smaller first)
+    standalone: str = ""   # why only its own command runs this list ("" = a study of the pipeline)
 
     @property
     def all_cases(self) -> tuple[Case, ...]:
@@ -295,17 +300,23 @@ def load_case_list(path: Path) -> CaseList:
                             f"{section!r}, section_order = {order!r})")
     if order is not None and (isinstance(order, bool) or not isinstance(order, (int, float))):
         raise CaseListError(f"{path}: [study] section_order = {order!r} must be a number (the section's place)")
+    standalone = head.get("standalone", "")
+    if not isinstance(standalone, str):
+        raise CaseListError(f"{path}: [study] standalone = {standalone!r} must be the reason (text) why only its own "
+                            f"command runs this list")
     report = data.get("report", {})
     if not isinstance(report, dict):
         raise CaseListError(f"{path}: [report] must be a table (the report section's choices), got {report!r}")
     return CaseList(study, head.get("description", ""), head["summary"], tuple(cases), path, report, tuple(samples),
-                    section, None if order is None else float(order))
+                    section, None if order is None else float(order), standalone)
 
 
 def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = None) -> list[CaseList]:
-    """Every case list in ``folder`` (sorted by name), or only the named studies.
+    """Every study's case list in ``folder`` (sorted by name), or only the named studies.
 
-    A missing folder, or one without case lists, is a CaseListError (never an empty run).
+    A missing folder, or one without case lists, is a CaseListError (never an empty run). A
+    ``standalone`` list (the benchmark's) is left out of "every", and naming it is a CaseListError
+    giving its reason: only its own command (:func:`load_case_list`) runs it.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -317,4 +328,10 @@ def load_case_lists(folder: Path = CASES_DIR, studies: Iterable[str] | None = No
     missing = [s for s in chosen if s not in available]
     if missing:
         raise CaseListError(f"no case list for {missing} in {folder}; available: {', '.join(available)}")
-    return [load_case_list(available[s]) for s in chosen]
+    lists = [load_case_list(available[s]) for s in chosen]
+    if studies is None:
+        return [cl for cl in lists if not cl.standalone]
+    for cl in lists:
+        if cl.standalone:
+            raise CaseListError(f"{cl.path}: not a study of the pipeline ([study] standalone): {cl.standalone}")
+    return lists

@@ -26,10 +26,11 @@ from study.results import SimulationResult
 
 def run_case(case: Case) -> SimulationResult:
     """Compute one case (in whatever process the executor chose)."""
+    options = case.kwargs
+    options.pop("repeat", None)  # the k-th timing of the same run (a key of its own, the same result)
     if case.engine == "inhouse":
         from study.simulate import simulate
 
-        options = case.kwargs
         initial = options.pop("initial", "consistent")
         ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
         if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
@@ -48,7 +49,6 @@ def run_case(case: Case) -> SimulationResult:
         return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
     from study import exudyn_models
 
-    options = case.kwargs
     h = options.pop("h")
     return exudyn_models.run(load_parameters(case.mechanism, case.variant), case.t_end, h, **options)
 

@@ -31,6 +31,7 @@ from typing import Iterable
 
 import pandas as pd
 
+from study.integrity import atomic_write
 from study.pipeline import CASES_DIR, PIPELINE_RECORD, CaseList, CaseListError, Store, load_case_lists
 from study.report.context import ReportContext, default_render_workers
 from study.report.render import markdown_to_html, md_table, number_figures, png_data_uri
@@ -162,7 +163,7 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
                           [{"stage": f"figures {k}", "wall_s": float(v)} for k, v in ctx.figure_stats.items()] +
                           [{"stage": "figure render workers", "wall_s": float(ctx.render_workers)}])
     (reports_dir / "timing").mkdir(parents=True, exist_ok=True)
-    timing.to_csv(reports_dir / "timing" / "report_timing.csv", index=False)
+    atomic_write(reports_dir / "timing" / "report_timing.csv", timing.to_csv(index=False, lineterminator="\n"))
 
     written = {p.name for p in ctx.figures_written} | {p.with_suffix(".svg").name for p in ctx.figures_written}
     for stale in sorted(figures_dir.iterdir()):
@@ -189,14 +190,13 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     markdown = number_figures("\n".join(lines).rstrip() + "\n")
 
     index = reports_dir / "index.md"
-    index.write_text(markdown, encoding="utf-8")
+    atomic_write(index, markdown)
     html_text = markdown_to_html(markdown, lambda src: png_data_uri(reports_dir / src), "Validation study: report")
-    (reports_dir / "report.html").write_text(html_text, encoding="utf-8")
+    atomic_write(reports_dir / "report.html", html_text)
 
     outputs = [index, reports_dir / "report.html"] + sorted(figures_dir / n for n in written)
     manifest["outputs"] = _file_list(outputs, root)
-    (reports_dir / "manifest.json").write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
-                                                encoding="utf-8")
+    atomic_write(reports_dir / "manifest.json", json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return index
 
 

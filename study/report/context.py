@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from study.integrity import atomic_write
 from study.pipeline import Case, CaseList, Store, find
 from study.report.figures import save_figure
 from study.results import SimulationResult
@@ -127,7 +128,7 @@ class ReportContext:
                 self._pool = None
             folder = self.reports_dir / "figures"
             folder.mkdir(parents=True, exist_ok=True)
-            (folder / FIGURE_KEYS).write_text(json.dumps(dict(sorted(keys.items())), indent=1) + "\n")
+            atomic_write(folder / FIGURE_KEYS, json.dumps(dict(sorted(keys.items())), indent=1) + "\n")
 
 
 FIGURE_KEYS = "figure_keys.json"

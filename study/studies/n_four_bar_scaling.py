@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from study.integrity import atomic_write
+
 VARIANTS = (("seed", 2.0), ("n5", 2.0), ("n10", 2.0), ("n20", 1.0), ("n40", 1.0))
 OUT = Path(__file__).resolve().parents[2] / "reports" / "tables" / "singular_four_bar_scaling.csv"
 
@@ -88,7 +90,7 @@ def main() -> int:
         rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
         print(f"  {rows[-1]}", file=sys.stderr, flush=True)
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    pd.DataFrame(rows).to_csv(OUT, index=False)
+    atomic_write(OUT, pd.DataFrame(rows).to_csv(index=False, lineterminator="\n"))
     print(f"wrote {OUT}", file=sys.stderr)
     return 0
 
