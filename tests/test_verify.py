@@ -91,12 +91,6 @@ def test_perturbed_case_has_its_own_key():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 13 is open: measured on 2026-11-23 (cold clone), a +-4 ulp move of q(0), qd(0) changes "
-    "work_precision max_abs_dq by 22-25 %, max_abs_phidot by up to 59 %, energy_error_relative by 32-35 %; "
-    "sensitivity max_abs_dq_vs_reference by 48-55 %, energy_error by 33 %; slider_crank_eps_sweep's errors "
-    "against the exact run by 5e-5 absolute and nfev by 7-9 %; slider_crank_summary max_abs_phi by 38 %. "
-    "These metrics are ill-conditioned, not wrong; strict: the marker must go once they meet their rules"))
 def test_perturbation_check_passes(tmp_path):
     """Every in-house case of the studies rerun from q(0), qd(0) moved by +-4 ulps: every reported column within
     its rule (reference/verify.toml). Uses (and fills) the pipeline cache."""

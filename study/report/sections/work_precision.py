@@ -217,9 +217,10 @@ def section(ctx: ReportContext) -> list[str]:
               "differences: moving q(0), qd(0) by 4 ulps moved max|Δq| by 60–97 % (DOP853 rtol 1e-11, RK45 rtol 1e-6) "
               "and the rtol 1e-13 reference by 1.6e-8 rad, which is why these errors differed between machines. With "
               "the switches located, every step lies inside one smooth piece. The errors are still decided partly "
-              "by accept/reject decisions at about 70 restarts in 5 s: on another host some moved by up to a factor "
-              "2 (none, DOP853, rtol 1e-8: 1.27e-6 and 9.6e-7 rad), so read them by their decade, as the figure "
-              "does (`make verify` judges them to half a decade; section \"How far the numbers reproduce\"). CPU "
+              "by accept/reject decisions at about 70 restarts in 5 s: on another host and under a 4-ulp move of "
+              "q(0) some moved by up to a factor 4 (projection, DOP853, rtol 1e-10: 4.2e-9 and 1.1e-9 rad), so read "
+              "them by their decade, as the figure does (`make verify` judges them to their decade; section \"How "
+              "far the numbers reproduce\"). CPU "
               "times are this "
               "machine's (`timing/work_precision_timing.csv`); function evaluations are deterministic.", ""]
     lines += [_work_precision_figure(ctx, table), ""]
