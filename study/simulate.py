@@ -17,6 +17,7 @@ from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_metadata
+from study.solver.stabilization import Stabilization
 
 __all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "build_dynamics", "check_run_size", "resolve", "simulate"]
 
@@ -52,7 +53,7 @@ def simulate(
     qd0=None,
     t_end: float = 1.0,
     *,
-    method: str = "none",
+    method: str | Stabilization = "none",
     integrator: str = "RK45",
     rtol: float = 1e-8,
     atol: float = 1e-10,
@@ -83,9 +84,11 @@ def simulate(
         Initial state; it should satisfy the constraints (see ``study.solver.initial``).
     t_end : float
         End time [s], > 0.
-    method : str
+    method : str or Stabilization
         Stabilization: 'none', 'baumgarte', 'sliding_mode', 'projection'; options go in
-        ``method_options`` (d, omega or alpha, beta; Lambda, K, k, sgn, width; weighting).
+        ``method_options`` (d, omega or alpha, beta; Lambda, K, k, sgn, width; weighting). Or a
+        ``study.solver.stabilization.Stabilization`` object (e.g. ``Baumgarte(d=1, omega=10)``, or a
+        user's subclass on the reference backend), whose fields are its options.
     integrator : str
         'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: rtol/atol) or 'RK4' (fixed ``step``).
     acceleration_solver : str

@@ -267,3 +267,31 @@ def test_switches_located_at_loose_tolerances(method, integrator, rtol, t_end):
     loose_switches = {(e["indicator"], e["new_sign"]) for e in loose.events}
     assert {(e["indicator"], e["new_sign"]) for e in accurate.events} <= loose_switches
     assert len(loose.events) >= len(accurate.events)
+
+
+def test_method_objects_are_accepted_like_names():
+    """simulate(method=Baumgarte(...)) runs the same method as simulate(method='baumgarte', ...): the same
+    arrays, since the object is the one the name builds. A user's subclass runs on the reference path, and the
+    compiled path refuses it by name (it has no compiled counterpart); options next to an object are an error."""
+    from study.solver.stabilization import Baumgarte
+
+    by_name = simulate("quick_return", t_end=0.2, method="baumgarte", d=1.0, omega=10.0)
+    by_object = simulate("quick_return", t_end=0.2, method=Baumgarte(d=1.0, omega=10.0))
+    assert np.array_equal(by_name.q, by_object.q) and np.array_equal(by_name.lam, by_object.lam)
+
+    class Doubled(Baumgarte):
+        def bias(self, phi, phidot):
+            return 2.0 * super().bias(phi, phidot)
+
+    from study.mechanisms import initial_state, load
+
+    ps, eom = load("quick_return", "seed")
+    st = initial_state(ps, eom)
+    off = st.q + np.array([1e-4, 0.0, 0.0])  # off the constraints, so the bias is not zero
+    runs = [simulate(eom, off, st.qd, 0.2, method=m, check=False)
+            for m in (Baumgarte(d=1.0, omega=10.0), Doubled(d=1.0, omega=10.0))]
+    assert np.abs(runs[0].phi).max() > 1e-6 and np.abs(runs[0].q - runs[1].q).max() > 1e-8
+    with pytest.raises(ValueError, match="no compiled counterpart of the stabilization Doubled"):
+        simulate("quick_return", t_end=0.2, method=Doubled(d=1.0, omega=10.0), backend="compiled")
+    with pytest.raises(ValueError, match="its options are its fields"):
+        simulate("quick_return", t_end=0.2, method=Baumgarte(d=1.0, omega=10.0), d=2.0)

@@ -35,7 +35,7 @@ from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
 from study.solver.run import build_dynamics, output_times, run_metadata
-from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization
+from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
 SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
@@ -92,6 +92,9 @@ def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_wo
     r, nc = eom.n_constraints, len(eom.contacts)
     s = stabilization
     friction = None if law is None else law.name
+    if type(s) not in STABILIZATIONS.values():  # a user's subclass: its bias is not the compiled one
+        raise ValueError(f"backend='compiled' has no compiled counterpart of the stabilization {type(s).__name__} "
+                         f"(name {s.name!r}); compiled: {', '.join(_STAB_IDS)}; use backend='reference'")
     ci = [_STAB_IDS[s.name], _SIGN_IDS.get(getattr(s, "sgn", "sign"), 0), _FRICTION_IDS[friction],
           _SIGN_IDS.get(getattr(law, "sgn", "sign"), 0), int(getattr(s, "weighting", "") == "mass"),
           int(getattr(s, "max_iter", 0)), n_load_modes]

@@ -15,10 +15,10 @@ from study.results import package_versions
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching, make_friction
-from study.solver.stabilization import make_stabilization
+from study.solver.stabilization import Stabilization, make_stabilization
 
 
-def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, method: str,
+def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, method: str | Stabilization,
                    acceleration_solver: str, friction: str | None, friction_eps: float, friction_sgn: str,
                    resistance_reading: str = "holds", **method_options) -> tuple[Dynamics, np.ndarray, StickSlipSwitching | None]:
     """A run's dynamics (with friction: a FrictionDynamics), its initial state y0 and its stick/slip rule.

@@ -221,8 +221,15 @@ STABILIZATIONS: dict[str, type[Stabilization]] = {
 }
 
 
-def make_stabilization(name: str, **options) -> Stabilization:
-    """Build a stabilization method by name. Baumgarte also accepts ``alpha``/``beta``."""
+def make_stabilization(name: str | Stabilization, **options) -> Stabilization:
+    """Build a stabilization method by name (Baumgarte also accepts ``alpha``/``beta``), or take a
+    :class:`Stabilization` object as it is, the way scipy's ``solve_ivp`` takes an ``OdeSolver`` class:
+    its options are then its own fields, and further options are an error."""
+    if isinstance(name, Stabilization):
+        if options:
+            raise ValueError(f"method is a {type(name).__name__} object: its options are its fields, so "
+                             f"{sorted(options)} cannot be given as well")
+        return name
     if name not in STABILIZATIONS:
         raise ValueError(f"unknown stabilization method {name!r}; valid choices: {', '.join(STABILIZATIONS)}")
     if name == "baumgarte" and ("alpha" in options or "beta" in options):
