@@ -192,8 +192,8 @@ def subsection(ctx: ReportContext) -> list[str]:
               "stabilization gains of 1e3 1/s keep the explicit integrators near their stability limit, where "
               "accept/reject decisions depend on last bits. Two groups are one host's values: Baumgarte with DOP853 "
               "(a 4-ulp move of q(0) took rtol 1e-9 from 7.7e-10 to 4.2e-11 rad) and every sliding-mode run (sgn "
-              "width 1e-8, below the residuals; another host gave 5.9e-9 rad where this table has 5.6e-10, DOP853, "
-              "rtol 1e-8). Section \"How far the numbers reproduce\" lists the rules.", "",
+              "width 1e-8, below the residuals; DOP853 at rtol 1e-8 gave 5.6e-10 rad on one host and 5.9e-9 on "
+              "another). Section \"How far the numbers reproduce\" lists the rules.", "",
               "Cheapest setting of each series that reaches a given error against the published solution "
               "(CPU seconds; the published values' own error, ~1e-9 rad, bounds what can be shown):", "",
               _cheapest_table(table), "", "Observed orders of the fixed-step series:", "", _orders_table(orders), ""]

@@ -84,9 +84,9 @@ def _n_four_bar(ctx: ReportContext) -> list[str]:
                   "index-3 solver, an implicit integrator that solves the constraints at position level every "
                   "step, does better on this measure. The benchmark's published reference trajectory of B0 is not "
                   "in this repository, so x_B0 is compared between the runs only (figure). **These numbers are one "
-                  "host's:** past a singular position the run amplifies last-bit differences without bound (another "
-                  "host gave x_B0(10 s) = -0.117 m instead of -0.615 m and a drift of 0.85 J instead of 1.52 J at "
-                  "DOP853 rtol 1e-12); only the verdicts (passes, stops and where) reproduce (section \"How far the "
+                  "host's:** past a singular position the run amplifies last-bit differences without bound (DOP853 at "
+                  "rtol 1e-12 gave x_B0(10 s) = -0.615 m and a drift of 1.52 J on one host, -0.117 m and 0.85 J on "
+                  "another); only the verdicts (passes, stops and where) reproduce (section \"How far the "
                   "numbers reproduce\").", ""]
     ex = passed[passed["engine"] == "exudyn"]
     if len(ex):

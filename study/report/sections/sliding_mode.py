@@ -266,8 +266,8 @@ def _sliding_mode_section(runs: SlidingModeRuns, runs_table: SavedTable | None, 
         lines += ["### Verdicts per integrator setting", "", frame_table(ordered_text, ordered_vals, True), "",
                   "The residuals and energy errors behind these verdicts reproduce to their decade (which is what the "
                   "verdicts use), except the LSODA rows, which are one host's values: LSODA changes its order and its "
-                  "Adams/BDF method by heuristics that last bits decide (another host: sliding mode sat, max|Φ(20 s)| "
-                  "2.5e-9 instead of 1.1e-8 m). Section \"How far the numbers reproduce\" lists the rules.", ""]
+                  "Adams/BDF method by heuristics that last bits decide (sliding mode sat, max|Φ(20 s)|: 1.1e-8 m on "
+                  "one host, 2.5e-9 m on another). Section \"How far the numbers reproduce\" lists the rules.", ""]
         for column in [c for c in ordered_vals.columns if pd.api.types.is_bool_dtype(ordered_vals[c])]:
             holds, fails = _settings_where(ordered_vals, column)
             lines.append(f"- `{column}` holds at {len(holds)} of {len(ordered_vals)} settings"
