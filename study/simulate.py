@@ -16,7 +16,7 @@ from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
 from study.solver.integrate import INTEGRATORS, integrate
-from study.solver.run import build_dynamics, output_times, run_metadata
+from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import Stabilization
 
 __all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "build_dynamics", "check_run_size", "resolve", "simulate"]
@@ -150,9 +150,8 @@ def simulate(
     if backend == "reference" and integrator != "RK4" and rtol < min_rtol:
         raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
                          f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g} (or backend='compiled')")
-    max_evaluations = tolerance("max_evaluations") if max_evaluations is None else max_evaluations
+    max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
     max_output_bytes = tolerance("max_output_bytes") if max_output_bytes is None else max_output_bytes
-    min_step = tolerance("min_step_fraction") * float(t_end) if min_step is None else min_step
     if q0 is None or qd0 is None:
         if ps is None:
             raise ValueError("q0 and qd0 are required for a user's EquationsOfMotion")

@@ -34,7 +34,7 @@ from study.solver.assemble import assemble_result
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
-from study.solver.run import build_dynamics, output_times, run_metadata
+from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
@@ -175,12 +175,9 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
 
     The run is bounded as on the reference path: RunBoundError once its evaluations reach
     ``max_evaluations``, or after ``min_step_run`` (reference/tolerances.toml) adaptive steps in a row
-    shorter than ``min_step``; both default as in ``study.simulate.simulate``.
+    shorter than ``min_step``; both default as on the reference path (``study.solver.run.run_bounds``).
     """
-    if max_evaluations is None:
-        max_evaluations = tolerance("max_evaluations")
-    if min_step is None:
-        min_step = tolerance("min_step_fraction") * t_end
+    max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
     eom, model = s.dyn.eom, s.model
     m = eom.n_coordinates
     tab = tableau(integrator)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from study.model.eom import EquationsOfMotion
+from study.reference_data import tolerance
 from study.results import package_versions
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.dynamics import Dynamics
@@ -37,6 +38,15 @@ def build_dynamics(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, *, m
     dyn = FrictionDynamics(eom, solver, stabilization, work_names, law=law, n_load_modes=n_load)
     y0 = np.concatenate([q0, qd0, np.zeros(len(work_names) + dyn.n_contacts)])
     return dyn, y0, StickSlipSwitching(dyn) if law.switched else None
+
+
+def run_bounds(t_end: float, max_evaluations: float | None = None,
+               min_step: float | None = None) -> tuple[float, float]:
+    """A run's (max_evaluations, min_step), the defaults of reference/tolerances.toml where not given: the
+    bounds both backends apply (evaluation limit; min_step_run steps in a row below min_step is a stall)."""
+    max_evaluations = tolerance("max_evaluations") if max_evaluations is None else max_evaluations
+    min_step = tolerance("min_step_fraction") * float(t_end) if min_step is None else min_step
+    return max_evaluations, min_step
 
 
 def output_times(t_end: float, output_step: float) -> np.ndarray:
