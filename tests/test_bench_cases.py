@@ -11,7 +11,7 @@ import pytest
 
 import study.pipeline as pl
 from study.bench import harness
-from study.bench.settings import CASE_LIST, CASES, T2_RTOLS, group
+from study.bench.settings import CASE_LIST, CASES, OUTPUT_STEPS, T2_RTOLS, group
 from study.bench.summary import summarize
 from study.bench.sweeps import plans
 from study.results import SimulationResult
@@ -40,7 +40,13 @@ def test_bench_list_holds_the_documented_plans():
     """Against the benchmark's description (study/bench/sweeps.py, issue 7), typed here by hand."""
     assert CASES == {"quick_return": ("smooth_cutting", 5.0, {}),
                      "slider_crank": ("sustained_sliding", 20.0, {"friction": "regularized", "friction_eps": 1e-3}),
-                     "four_bar": ("seed", 5.0, {})}
+                     "four_bar": ("seed", 5.0, {}), "andrews": ("seed", 0.03, {})}
+    assert OUTPUT_STEPS == {"quick_return": 0.01, "slider_crank": 0.01, "four_bar": 0.01, "andrews": 1e-3}
+    andrews = plans("andrews")
+    assert [(engine, method) for engine, method, _ in andrews][-2:] == [("Exudyn tuned", "index3"), ("Exudyn tuned", "index2")]
+    for _, _, cases in andrews:   # every fixed step divides the 1e-3 s sampling, from 2e-4 s down
+        steps = [c.kwargs.get("step", c.kwargs.get("h")) for c in cases if "rtol" not in c.kwargs]
+        assert all(abs(1e-3 / h - round(1e-3 / h)) < 1e-9 for h in steps) and (not steps or steps[0] == 2e-4)
     got = [(engine, method, len(cases)) for engine, method, cases in plans("slider_crank")]
     assert got == [("in-house compiled", "DOP853", 9), ("in-house compiled", "RK45", 9),
                    ("in-house compiled", "RK4", 9), ("in-house reference", "DOP853", 4),

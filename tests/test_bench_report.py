@@ -78,9 +78,8 @@ def test_targets_met_from_synthetic_tables():
     t = _targets()
     assert list(t.columns) == ["target", "threshold", "measured", "unit", "met", "how_measured", "repeats", "note"]
     verdicts = t.met.astype(str).tolist()
-    assert len(t) == 10 and verdicts.count("True") == 7
-    assert verdicts.count("reported") == 2 and verdicts.count("not measured") == 1  # ratio 3', Andrews
-    assert t[t.met.astype(str) == "not measured"].how_measured.iloc[0] == "not measured: the benchmark has no case for it yet"
+    assert len(t) == 9 and verdicts.count("True") == 7
+    assert verdicts.count("reported") == 2 and "not measured" not in verdicts  # ratio 3' (two mechanisms)
     accel = t[t.target.str.startswith("1:")].iloc[0]
     assert accel.measured == pytest.approx(0.83) and accel.threshold == THRESHOLDS["accel"][0]
     qr = t[t.target.str.startswith("2:")]
@@ -120,8 +119,10 @@ def test_exudyn_not_reaching_a_level_is_recorded():
 
 def test_helpers():
     assert repeats_for(0.1) == 5 and repeats_for(8.0) == 1 and repeats_for(6.0) == 2
-    h = order2_step(3.90625e-05, 8.8e-6, 1e-6)
+    h = order2_step(3.90625e-05, 8.8e-6, 1e-6, 0.01)
     assert h < 3.90625e-05 * np.sqrt(0.8 / 8.8) + 1e-15 and abs(0.01 / h - round(0.01 / h)) < 1e-6
+    h = order2_step(1.25e-05, 7.6e-5, 1e-6, 1e-3)   # Andrews: its samples every 1e-3 s
+    assert h < 1.25e-05 * np.sqrt(0.8 / 76) + 1e-15 and abs(1e-3 / h - round(1e-3 / h)) < 1e-6
 
 
 def _write(folder, targets):
@@ -162,7 +163,7 @@ def test_section_renders_saved_numbers(tmp_path):
         assert fmt_number(value) in text
     assert "Linux-test" in text and "432" in text and "exudyn 1.13.6" in text
     assert "41.7" in text and "2.5e-10" in text
-    assert "All 7 target rows met." in text and "3 row(s) carry no verdict" in text
+    assert "All 7 target rows met." in text and "2 row(s) carry no verdict" in text
     assert (tmp_path / "figures" / "benchmark_work_precision.png").exists()
     read = {p.name for p in ctx.inputs}
     assert {"targets.csv", "work_precision.csv", "ratio_inhouse_exudyn.csv", "machine.json",
@@ -172,7 +173,7 @@ def test_section_renders_saved_numbers(tmp_path):
     missed.to_csv(tmp_path / "benchmarks" / "targets.csv", index=False)
     text = "\n".join(benchmarks.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "| 7.5 | µs | **missed** |" in text and "1 of 7 target rows missed" in text
-    assert "| reported |" in text and "| not measured |" in text
+    assert "| reported |" in text
 
 
 def test_section_without_benchmark(tmp_path):
@@ -187,3 +188,24 @@ def test_study_cases_compiled_over_reference_row():
     t = evaluate_targets(_accel(), ratio, _qr20(), _scaling(), _memory(), study_cpu=study_cpu)
     row = t[t.target.str.contains("study cases")].iloc[0]
     assert row.measured == pytest.approx(0.05) and row.met is False and "s/b" in row.how_measured
+
+
+def test_a_mechanisms_run_replaces_only_its_own_rows(tmp_path):
+    """``--mechanisms andrews`` keeps the other mechanisms' rows of a saved table and replaces Andrews' rows."""
+    from study.bench.command import _merge
+
+    old = pd.DataFrame({"mechanism": ["quick_return", "andrews", "four_bar"], "cpu_s": [1.0, 2.0, 3.0]})
+    new = pd.DataFrame({"mechanism": ["andrews", "andrews"], "cpu_s": [5.0, 6.0]})
+    merged = _merge(new, old, ["andrews"])
+    assert sorted(zip(merged.mechanism, merged.cpu_s)) == [("andrews", 5.0), ("andrews", 6.0), ("four_bar", 3.0),
+                                                          ("quick_return", 1.0)]
+    assert _merge(new, None, ["andrews"]).equals(new)
+
+
+def test_unknown_mechanism_is_refused_by_name(tmp_path):
+    from study.bench.command import add_arguments, run
+    import argparse
+
+    args = add_arguments(argparse.ArgumentParser()).parse_args(["--mechanisms", "andrew", "--out", str(tmp_path)])
+    with pytest.raises(ValueError, match="--mechanisms andrew: no such mechanism.*valid: quick_return"):
+        run(args)

@@ -76,7 +76,7 @@ def test_report_from_saved_runs(saved):
             "stage_wall_seconds"} <= set(manifest)
     keys = manifest["cases"]["sliding_mode"]
     assert len(keys) == 7 and all(v["saved"] for v in keys.values())
-    assert "run:sliding_mode" in manifest["stage_wall_seconds"]
+    assert "cases:sliding_mode" in manifest["stage_wall_seconds"] and "run" in manifest["stage_wall_seconds"]
     inputs = {e["path"]: e["sha256"] for e in manifest["inputs"]}
     runs_path = next(p for p in inputs if p.endswith("tables/sliding_mode_runs.csv"))
     assert inputs[runs_path] == hashlib.sha256((reports / "tables" / "sliding_mode_runs.csv").read_bytes()).hexdigest()
@@ -205,7 +205,7 @@ def test_case_lists_name_their_report_sections(tmp_path):
 
     assert report_sections(pl.load_case_lists()) == (
         "claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-        "work_precision", "benchmarks", "beyond_papers", "reproducibility")
+        "work_precision", "benchmarks", "beyond_papers", "backends", "reproducibility")
     folder = tmp_path / "cases"
     folder.mkdir()
     (folder / "a.toml").write_text(TINY)
@@ -218,3 +218,22 @@ def test_case_lists_name_their_report_sections(tmp_path):
     (folder / "b.toml").write_text(TINY.replace("section_order = 40\n", ""))
     with pytest.raises(pl.CaseListError, match="go together"):
         pl.load_case_lists(folder)
+
+
+def test_backends_section_lists_every_pair_that_does_not_agree(tmp_path):
+    """A sampled compiled/reference pair beyond its bound is named with its numbers in the report."""
+    from study.report.context import ReportContext
+    from study.report.sections import backends
+
+    tables = tmp_path / "tables"
+    tables.mkdir()
+    rule = "adaptive_global_error_factor * rtol * max|q|"
+    pd.DataFrame({"study": ["slider_crank", "slider_crank", "work_precision"],
+                  "case": ["slider_crank/eps_sweep [eps=1e-2]", "slider_crank/treatments [exact]", "work_precision/rk4 [h=2e-3]"],
+                  "t_end": [20.0, 20.0, 5.0], "max_abs_dq": [5.77e-5, 1e-9, 2e-13], "bound": [4.44e-5, 4.4e-6, 5e-8],
+                  "rule": [rule, rule, "fast_fixed_step_agreement * max|q|"], "agree": [False, True, True]}
+                 ).to_csv(tables / "backend_agreement.csv", index=False)
+    text = "\n".join(backends.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
+    assert "**2 of 3 sampled pairs agree**" in text and "slider_crank 1 of 2, work_precision 1 of 1" in text
+    assert "| slider_crank | slider_crank/eps_sweep [eps=1e-2] | 5.77e-05 | 4.44e-05 | 1.3 |" in text
+    assert "treatments [exact]" not in text

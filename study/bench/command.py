@@ -52,7 +52,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--only", nargs="+", metavar="SECTION",
                         help="run only these sections (accel, qr20, sweep, scaling, profile, studies, compile); the others' tables "
                              "are read from the output folder")
+    parser.add_argument("--mechanisms", nargs="+", metavar="MECHANISM",
+                        help=f"run the per-mechanism sections (accel, sweep, profile) for these mechanisms only "
+                             f"({', '.join(CASES)}); the other mechanisms' rows are kept from the output folder's tables")
     return parser
+
+
+def _merge(new: pd.DataFrame, old: pd.DataFrame | None, mechanisms: list[str]) -> pd.DataFrame:
+    """``new`` (rows of ``mechanisms``) with the rows of the other mechanisms kept from ``old``."""
+    if old is None or old.empty:
+        return new
+    return pd.concat([old[~old.mechanism.isin(mechanisms)], new], ignore_index=True)
 
 
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
@@ -79,6 +89,11 @@ def run(args: argparse.Namespace) -> int:
     unknown = only - set(SECTIONS)
     if unknown:
         raise ValueError(f"--only {', '.join(sorted(unknown))}: unknown section(s); valid: {', '.join(SECTIONS)}")
+    mechs = list(args.mechanisms or CASES)
+    unknown = set(mechs) - set(CASES)
+    if unknown:
+        raise ValueError(f"--mechanisms {', '.join(sorted(unknown))}: no such mechanism in the benchmark's case list; "
+                         f"valid: {', '.join(CASES)}")
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
     if args.remeasure:
@@ -89,12 +104,15 @@ def run(args: argparse.Namespace) -> int:
         if not path.exists():
             raise FileNotFoundError(f"{path} is missing: run the section that writes it (without --only) first")
         return pd.read_csv(path)
+
+    def kept(name):   # the saved table whose other mechanisms' rows a --mechanisms run keeps
+        return saved(name) if args.mechanisms else None
     t0 = time.perf_counter()
     info = machine()
     info.update({"repeats": repeats(args.quick), "quick": args.quick, "long_run_s": LONG_RUN, "reference_rtol": REF_RTOL,
                  "reference_check_rtols": list(REF_CHECK_RTOLS), "exudyn_run_budget_s": EXUDYN_RUN_BUDGET,
                  "exudyn_repeats": EXUDYN_REPEATS, "linearity_repeats": LINEAR_REPEATS,
-                 "sections_run": sorted(only), "load_average_at_start": os.getloadavg()[0],
+                 "sections_run": sorted(only), "mechanisms_run": mechs, "load_average_at_start": os.getloadavg()[0],
                  "saved_runs": str(bench_store().root), "remeasure": args.remeasure})
     log(f"machine: {info['platform']}, {info['cpu_count']} CPUs, load {os.getloadavg()}; output {out}")
     log("warming up the compiled path (loads or builds the cache)")
@@ -102,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
         simulate(mech, variant=variant, t_end=0.05, backend="compiled", **extra)
     simulate("quick_return", variant="seed", t_end=0.05, backend="compiled")
     if "accel" in only:
-        accel = accel_costs(repeats(args.quick), 2000 if args.quick else 20000)
+        accel = _merge(accel_costs(repeats(args.quick), 2000 if args.quick else 20000, mechs),
+                       kept("acceleration_evaluation.csv"), mechs)
         write_csv(accel, out / "acceleration_evaluation.csv")
     else:
         accel = saved("acceleration_evaluation.csv")
@@ -113,8 +132,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         qr20 = saved("quick_return_20s.csv")
     if "sweep" in only:
-        tables = summarize([c for m in CASES for c in sweep(m, args.quick)], bench_store().load)
-        wp, sweep_refs = tables["work_precision"], tables["references"]
+        tables = summarize([c for m in mechs for c in sweep(m, args.quick)], bench_store().load)
+        wp = _merge(tables["work_precision"], kept("work_precision.csv"), mechs)
+        sweep_refs = tables["references"]
         write_csv(wp, out / "work_precision.csv")
         per_level = cheapest(wp)
         write_csv(per_level, out / "cpu_to_accuracy.csv")
@@ -123,12 +143,12 @@ def run(args: argparse.Namespace) -> int:
         save_work_precision_figure(wp, out)
     else:
         wp, ratio = saved("work_precision.csv"), saved("ratio_inhouse_exudyn.csv")
-    if "sweep" in only or "qr20" in only:   # references.csv: rows of the sections rerun, the others kept
-        old = saved("references.csv") if (out / "references.csv").exists() else pd.DataFrame()
-        keep = [] if old.empty else [old[old.t_end == (2.0 if args.quick else T2_T_END)] if "qr20" not in only
-                                     else old[old.t_end != (2.0 if args.quick else T2_T_END)]]
+    if "sweep" in only or "qr20" in only:   # references.csv: rows of the sections rerun replaced, the others kept
+        old = saved("references.csv") if (out / "references.csv").exists() else pd.DataFrame(columns=["mechanism", "t_end"])
+        of_qr20 = old.t_end == (2.0 if args.quick else T2_T_END)
+        rerun = (of_qr20 & ("qr20" in only)) | (~of_qr20 & old.mechanism.isin(mechs) & ("sweep" in only))
         new = ([sweep_refs] if "sweep" in only else []) + ([qr_refs] if "qr20" in only else [])
-        write_csv(pd.concat([*keep, *new], ignore_index=True), out / "references.csv")
+        write_csv(pd.concat([old[~rerun], *new], ignore_index=True), out / "references.csv")
     if "scaling" in only:
         time_df, density_df, mem_df = scaling(args.quick)
         write_csv(time_df, out / "scaling_simulated_time.csv")
@@ -147,7 +167,8 @@ def run(args: argparse.Namespace) -> int:
     elif (out / "study_backend_cpu.csv").exists():
         study_cpu = saved("study_backend_cpu.csv")
     if "profile" in only:
-        write_csv(overhead_profile(qr20, wp, accel, repeats(args.quick)), out / "overhead_profile.csv")
+        profile = overhead_profile(qr20, wp, accel, repeats(args.quick), mechs)
+        write_csv(_merge(profile, kept("overhead_profile.csv"), mechs), out / "overhead_profile.csv")
     targets = evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp, study_cpu=study_cpu)
     write_csv(targets, out / "targets.csv")
     for _, t in targets.iterrows():

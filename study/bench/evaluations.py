@@ -15,14 +15,16 @@ from study.bench.settings import CASES, EPS
 
 
 # --- (a) one acceleration evaluation ---------------------------------------------------------------
-def accel_costs(repeats: int, n_calls: int) -> pd.DataFrame:
-    """Microseconds per acceleration evaluation: reference Python path, compiled (inside a compiled
-    loop, i.e. the cost inside the integrator) and compiled called once from Python."""
+def accel_costs(repeats: int, n_calls: int, mechanisms=None) -> pd.DataFrame:
+    """Microseconds per acceleration evaluation of each mechanism (default: every one of the benchmark):
+    reference Python path, compiled (inside a compiled loop, i.e. the cost inside the integrator) and
+    compiled called once from Python."""
     from study.fast import frontend
     from study.mechanisms import initial_state, load
 
     rows = []
-    for mech, (variant, _, extra) in CASES.items():
+    for mech in mechanisms or CASES:
+        variant, _, extra = CASES[mech]
         ps, eom = load(mech, variant)
         st = initial_state(ps, eom)
         s = frontend.setup(eom, ps, st.q, st.qd, "none", extra.get("friction"), EPS, "tanh")

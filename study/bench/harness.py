@@ -19,7 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from study.bench.settings import CASE_LIST, LONG_RUN, LONG_RUN_TOTAL, OUTPUT_STEP, STORE_FOLDER, repeats
+from study.bench.settings import CASE_LIST, LONG_RUN, LONG_RUN_TOTAL, OUTPUT_STEPS, STORE_FOLDER, repeats
 from study.compare import max_deviation
 from study.model.compile import cache_dir
 from study.pipeline import Case, InlineExecutor, Store, run_cases
@@ -73,7 +73,7 @@ def median_cpu(fn, repeats: int) -> tuple[float, object]:
 def inhouse_case(mech: str, variant: str, t_end: float, extra: dict, backend: str, integrator: str, setting: float,
                  group: str) -> Case:
     """An in-house run of the benchmark as a case: rtol ``setting`` (atol = rtol/100), or RK4's step."""
-    options = dict(integrator=integrator, backend=backend, output_step=OUTPUT_STEP, **extra)
+    options = dict(integrator=integrator, backend=backend, output_step=OUTPUT_STEPS[mech], **extra)
     if integrator == "RK4":
         options["step"] = setting
     else:

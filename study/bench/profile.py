@@ -6,12 +6,13 @@ import numpy as np
 import pandas as pd
 
 from study.bench.harness import inhouse_case, log, timed
-from study.bench.settings import CASES, OUTPUT_STEP, RATIO_LEVEL, T2_LEVEL
+from study.bench.settings import CASES, OUTPUT_STEPS, RATIO_LEVEL, T2_LEVEL
 
 
-def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, repeats: int) -> pd.DataFrame:
-    """Split the CPU of each run behind a loop-overhead row into its parts (numba code has no profiler
-    hooks, so the parts are measured, not sampled).
+def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, repeats: int,
+                     mechanisms=None) -> pd.DataFrame:
+    """Split the CPU of each run behind a loop-overhead row of ``mechanisms`` (default: all) into its parts
+    (numba code has no profiler hooks, so the parts are measured, not sampled).
 
     * ``startup_s``: the same run stopped after one output step (setup of the loop state, initial
       mode, the first Python -> compiled call, first step-size selection);
@@ -23,21 +24,22 @@ def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, 
     """
     loop = accel[accel.path == "compiled, in compiled loop"].set_index("mechanism")
     call = accel[accel.path == "compiled, one call from Python"].set_index("mechanism")
+    mechanisms = list(mechanisms or CASES)
     runs = []
-    for variant, g in qr20.groupby("variant", sort=False):
+    for variant, g in (qr20.groupby("variant", sort=False) if "quick_return" in mechanisms else ()):
         ok = g[g.error + g.reference_uncertainty <= T2_LEVEL]
         b = ok.loc[ok.cpu_s.idxmin()] if not ok.empty else g.loc[g.error.idxmin()]
         runs.append(("quick_return", variant, float(b.t_end), {}, float(b.rtol), float(b.eval_us)))
     for mech, g in wp[(wp.engine == "in-house compiled") & (wp.method == "DOP853")].groupby("mechanism", sort=False):
         ok = g[g.error <= RATIO_LEVEL]
-        if mech in CASES and mech != "quick_return" and not ok.empty and mech in loop.index:
+        if mech in mechanisms and mech != "quick_return" and not ok.empty and mech in loop.index:
             b = ok.loc[ok.cpu_s.idxmin()]
             runs.append((mech, b.variant, float(b.t_end), CASES[mech][2], float(b.setting),
                          float(loop.loc[mech, "us_per_evaluation"])))
     rows = []
     for mech, variant, t_end, extra, rtol, eval_us in runs:
         cpu, r = timed(inhouse_case(mech, variant, t_end, extra, "compiled", "DOP853", rtol, "profile"), repeats)
-        start, _ = timed(inhouse_case(mech, variant, OUTPUT_STEP, extra, "compiled", "DOP853", rtol, "profile"), repeats)
+        start, _ = timed(inhouse_case(mech, variant, OUTPUT_STEPS[mech], extra, "compiled", "DOP853", rtol, "profile"), repeats)
         call_us = float(call.loc[mech, "us_per_evaluation"]) if mech in call.index else np.nan
         nfev = int(r.stats["nfev"])
         ev = int(r.stats.get("events", 0))

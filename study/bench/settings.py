@@ -40,7 +40,7 @@ LONG_RUN = 5.0  # [s] runs at least this long are timed fewer than REPEATS times
 LONG_RUN_TOTAL = 15.0  # [s] CPU allowed for the repeats of one long run
 LEVELS = (1e-4, 1e-6, 1e-8)
 EXUDYN_LEVELS = (1e-4, 1e-6)  # levels the Exudyn step is refined for (1e-8: out of reach)
-OUTPUT_STEP = 0.01
+OUTPUT_STEP = 0.01  # [s] sampling of the quick-return runs outside the sweeps (20 s runs, scaling)
 EPS = DEFAULT_EPS  # the regularized friction's default width, the same on both engines
 SWEEP_BUDGET = 6.0  # [s] stop halving a step / tightening a tolerance once one run costs more
 EXUDYN_RUN_BUDGET = 150.0  # [s] largest predicted CPU of one order-2 refinement run of Exudyn (the
@@ -55,6 +55,9 @@ EXUDYN_REPEATS = 3  # every Exudyn run that enters a ratio is timed at least thi
 #: Mechanism -> (variant, horizon [s], friction options) of the work-precision sweeps: their reference runs.
 CASES = {c.mechanism: (c.variant, c.t_end, _extra(c))
          for c in CASE_LIST.cases if c.group == f"{c.mechanism}: reference"}
+#: Mechanism -> sampling step [s] of its runs (its reference group's output_step): every run of a mechanism is
+#: compared on these samples, and its fixed steps divide it.
+OUTPUT_STEPS = {c.mechanism: c.kwargs["output_step"] for c in CASE_LIST.cases if c.group == f"{c.mechanism}: reference"}
 REF_RTOL = group(f"{next(iter(CASES))}: reference")[0].kwargs["rtol"]
 REF_CHECK_RTOLS = tuple(c.kwargs["rtol"] for c in group(f"{next(iter(CASES))}: reference check"))
 T2_LEVEL = 1e-8
@@ -62,8 +65,6 @@ T2_T_END = group("quick_return 20 s: DOP853")[0].t_end
 T2_RTOLS = tuple(dict.fromkeys(c.kwargs["rtol"] for c in group("quick_return 20 s: DOP853")))  # a grid of decades
 T2_REF_RTOL = group("quick_return 20 s: reference")[0].kwargs["rtol"]   # the independent reference: compiled RK45
 T2_VARIANTS = tuple(c.variant for c in group("quick_return 20 s: reference"))
-#: Mechanisms of the issue's table the benchmark has no case for yet: a row says so.
-ABSENT = ("andrews",)
 RATIO_LEVEL = 1e-6
 #: Timings per point of the linearity fit (compiled runs of 4 ms ... 0.4 s): a median of 21 is stable to
 #: ~1 % on a loaded machine where single timings of a few ms scatter by 20-50 %.

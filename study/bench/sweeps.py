@@ -31,7 +31,7 @@ import pandas as pd
 
 from study.bench.harness import at_setting, execute, log, max_dq, repeat_of, repeats_for, setting, timed, with_labels
 from study.bench.settings import (CASE_LIST, CASES, EXUDYN_ENGINES, EXUDYN_LEVELS, EXUDYN_REPEATS, EXUDYN_RUN_BUDGET,
-                                  LEVELS, MARGIN, OUTPUT_STEP, REF_RTOL, SWEEP_BUDGET, group)
+                                  LEVELS, MARGIN, OUTPUT_STEPS, REF_RTOL, SWEEP_BUDGET, group)
 from study.pipeline import Case, MissingResult
 
 PYTHON_EXUDYN = "Exudyn (Python user functions)"   # run at the tuned sweep's steps, not swept
@@ -55,8 +55,8 @@ def plans(mech: str) -> list[tuple[str, str, list[Case]]]:
     return out
 
 
-def order2_step(h: float, err: float, level: float, margin: float = MARGIN) -> float:
-    """The fixed step predicted to reach ``margin * level`` from (h, err) if err ∝ h², as 0.01 s / n.
+def order2_step(h: float, err: float, level: float, output_step: float, margin: float = MARGIN) -> float:
+    """The fixed step predicted to reach ``margin * level`` from (h, err) if err ∝ h², as output_step / n.
 
     Parameters
     ----------
@@ -64,15 +64,17 @@ def order2_step(h: float, err: float, level: float, margin: float = MARGIN) -> f
         Finest step tried [s] and its error [rad].
     level : float
         Error to reach [rad].
+    output_step : float
+        Sampling step of the runs [s].
 
     Returns
     -------
     float
-        ``OUTPUT_STEP / n`` with the smallest whole n such that the step is at most the prediction
+        ``output_step / n`` with the smallest whole n such that the step is at most the prediction
         (so output samples and the horizon stay whole multiples of it).
     """
     predicted = h * math.sqrt(margin * level / err)
-    return OUTPUT_STEP / math.ceil(OUTPUT_STEP / predicted - 1e-9)
+    return output_step / math.ceil(output_step / predicted - 1e-9)
 
 
 def sweep(mech: str, quick: bool) -> list[Case]:
@@ -84,7 +86,7 @@ def sweep(mech: str, quick: bool) -> list[Case]:
         Every case run, in order: the mechanism's reference and its checks, each swept run (label
         ``stage``) and its timing repeats; :func:`study.bench.summary.summarize` makes the tables.
     """
-    t_end = 1.0 if quick else CASES[mech][1]
+    t_end = min(1.0, CASES[mech][1]) if quick else CASES[mech][1]
     ref_case = replace(group(f"{mech}: reference")[0], t_end=t_end)
     checks = [replace(c, t_end=t_end) for c in group(f"{mech}: reference check")]
     ref = execute(ref_case)
@@ -126,7 +128,7 @@ def sweep(mech: str, quick: bool) -> list[Case]:
                 if not done or min(r["error"] for r in done) <= level:
                     break
                 finest = min(done, key=lambda r: r["setting"])
-                h = order2_step(finest["setting"], finest["error"], level)
+                h = order2_step(finest["setting"], finest["error"], level, OUTPUT_STEPS[mech])
                 predicted = finest["cpu_s"] * finest["setting"] / h
                 if predicted > run_budget:
                     log(f"(b) {mech} {engine} {method}: {level:g} needs h ~ {h:.3g} s, predicted {predicted:.0f} s > "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from study.bench.settings import ABSENT, COMPARISONS, REF_RTOL, REPEATS, T2_LEVEL, RATIO_LEVEL
+from study.bench.settings import COMPARISONS, REF_RTOL, REPEATS, T2_LEVEL, RATIO_LEVEL
 from study.reference_data import tolerance
 
 # Issue 7's targets: key -> (threshold, unit, text); 1-3 are the issue's numbers, 4a and 4b the
@@ -170,10 +170,6 @@ def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFram
             f"{', '.join(sorted(study_cpu.study.unique()))}); largest: {worst.case}", 1,
             f"ratios {r.min():.3g} … {r.max():.3g} (median {r.median():.3g}); CPU of each saved run, timed once when "
             "the pipeline computed it", case="study cases")
-    for mech in ABSENT:
-        rows.append({"target": f"5, 3: the quick-return's table for {mech}", "threshold": np.nan, "measured": np.nan,
-                     "unit": "-", "met": "not measured", "how_measured": "not measured: the benchmark has no case for it yet",
-                     "repeats": 0, "note": "its 0.03 s horizon needs its own steps and reference (not chosen yet)"})
 
     # 4a: linear in simulated time (compiled path): affine fit minimizing the relative residuals (weights
     # 1/cpu; an unweighted fit is set by the 100 s point alone), start-up cost a included

@@ -161,7 +161,7 @@ class Law:
     """Expressions in the description's inputs, t and mode symbols, with the parameter values bound."""
 
     def __init__(self, d: Description, subs: dict, exprs):
-        exprs = [sp.sympify(e).xreplace(subs) for e in exprs]
+        exprs = [sp.sympify(e).xreplace(subs).xreplace(_ground_values(d, subs)) for e in exprs]
         self.exprs = exprs
         syms = set().union(*(e.free_symbols for e in exprs))
         switches = [(name, sp.sympify(e).xreplace(subs), m) for name, e, m in d.switches if m in syms]
@@ -193,6 +193,17 @@ class Law:
             modes = [esym.IfThenElse(s(t, *inputs) >= 0, esym.Real(1.0), esym.Real(-1.0)) for s in switch_f]
             return f(t, *inputs, *modes)
         return evaluate
+
+
+def _ground_values(d: Description, subs: dict) -> dict:
+    """The inputs of ground points as the numbers they are (a fixed point's position; velocity 0), so a
+    law between a body point and a ground point reads only the body point (e.g. Andrews' spring)."""
+    values = {}
+    for sym, inp in d.inputs.items():
+        if inp.body == GROUND:
+            x, y = d.ground_points[inp.point]
+            values[sym] = {"x": x, "y": y}.get(inp.kind, sp.Integer(0))
+    return {k: sp.sympify(v).xreplace(subs) for k, v in values.items()}
 
 
 class Readers:

@@ -101,13 +101,34 @@ class RunSummary:
     wall_seconds: dict[str, float] = field(default_factory=dict)
 
 
+def compiled(case: Case) -> bool:
+    """Whether a case runs on the compiled path (study.fast)."""
+    return case.engine == "inhouse" and case.kwargs.get("backend") == "compiled"
+
+
+def warm_compiled(case: Case) -> None:
+    """Compile the compiled path for ``case``'s mechanism in this worker, or load it from numba's disk cache.
+
+    The compiled loop takes ~40 s to compile once; numba keeps it on disk, but two workers that start
+    compiled cases at the same time both compile it. :func:`run_cases` therefore gives this short run
+    to the first worker and the reference-path and Exudyn cases to the others first, so they find it
+    on disk when their turn comes to a compiled case.
+    """
+    from study.simulate import simulate
+
+    simulate(case.mechanism, variant=case.variant, t_end=1e-3, output_step=1e-3, backend="compiled")
+
+
 def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Future]]:
     """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops."""
     if isinstance(executor, InlineExecutor):  # one at a time, so each is saved before the next starts
         for case in todo:
             yield case, executor.submit(_run_case_timed, case)
         return
-    futures = {executor.submit(_run_case_timed, case): case for case in todo}
+    first = next((c for c in todo if compiled(c)), None)
+    if first is not None:   # its errors, if any, are those of the compiled cases, reported with them
+        executor.submit(warm_compiled, first)
+    futures = {executor.submit(_run_case_timed, case): case for case in sorted(todo, key=compiled)}
     try:
         for future in as_completed(futures):
             yield futures[future], future

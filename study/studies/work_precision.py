@@ -10,7 +10,9 @@ the smooth first 0.08 s, and over one whole crank revolution (1 s) with every ra
 
 - ``work_precision``: one row per run: method, integrator, rtol or h, max|q - q_ref| on common
   samples (the error), nfev and steps (deterministic cost), max|Phi|;
-- ``work_precision_timing``: the same keys with CPU seconds (machine-dependent, kept apart);
+- ``work_precision_timing``: the same keys with the backend, the case name and CPU seconds (machine-dependent,
+  kept apart; the sweeps run compiled, and the reference-path CPU of their sampled twins is in
+  ``backend_cpu_timing``, joined on the case name by the report);
 - ``work_precision_orders``: observed orders p = log(e_k / e_k+1) / log(h_k / h_k+1) between
   consecutive step sizes of every RK4 series (:func:`study.compare.observed_orders`).
 """
@@ -74,10 +76,10 @@ def summarize(cases: Sequence[Case], load: Load) -> dict[str, pd.DataFrame]:
             continue
         result = load(case)
         rows.append(run_row(case, result, reference))
-        timing.append({**describe(case), "cpu_seconds": result.stats.get("cpu_seconds"),
-                       "nfev": result.stats.get("nfev")})
+        timing.append({**describe(case), "backend": case.kwargs.get("backend", "reference"), "case": case.name,
+                       "cpu_seconds": result.stats.get("cpu_seconds"), "nfev": result.stats.get("nfev")})
     table = pd.DataFrame(rows)
-    ref_row = {"group": "reference", "cpu_seconds": reference.stats.get("cpu_seconds"),
+    ref_row = {"group": "reference", "backend": "reference", "cpu_seconds": reference.stats.get("cpu_seconds"),
                "nfev": reference.stats.get("nfev")}
     return {"work_precision": table,
             "work_precision_timing": pd.concat([pd.DataFrame(timing), pd.DataFrame([ref_row])], ignore_index=True),

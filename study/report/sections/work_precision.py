@@ -2,7 +2,8 @@
 
 Reads the tables ``work_precision``, ``work_precision_timing`` and ``work_precision_orders``
 (written by :func:`study.studies.work_precision.summarize`) and, when the cross-validation study has
-written them, ``exudyn_agreement`` and ``exudyn_agreement_timing`` for the Exudyn points. Never a
+written them, ``exudyn_agreement`` and ``exudyn_agreement_timing`` for the Exudyn points, and
+``backend_cpu_timing`` for the reference-path CPU of the sampled runs. Never a
 run. Figures: error against function evaluations and against CPU seconds (log-log), and the RK4
 convergence plot with its observed orders. Every number in the text is read from those tables.
 """
@@ -44,11 +45,12 @@ def _series(table: pd.DataFrame, x: str, y: str = "max_abs_dq") -> list:
     return out
 
 
-def _with_cpu(table: pd.DataFrame, timing: pd.DataFrame | None) -> pd.DataFrame:
+def _with_cpu(table: pd.DataFrame, timing: pd.DataFrame | None, columns=("cpu_seconds",)) -> pd.DataFrame:
+    """``table`` with the ``columns`` of the timing table's row of each run (matched on the run's settings)."""
     if timing is None:
-        return table.assign(cpu_seconds=np.nan)
+        return table.assign(**{c: np.nan for c in columns})
     keys = ["group", "method", "integrator", "rtol", "step", "t_end"]
-    t = timing[timing["group"] != "reference"][keys + ["cpu_seconds"]].copy()
+    t = timing[timing["group"] != "reference"][keys + list(columns)].copy()
     left, right = table.copy(), t
     for frame in (left, right):
         frame["rtol"] = frame["rtol"].fillna(-1.0)
@@ -57,6 +59,24 @@ def _with_cpu(table: pd.DataFrame, timing: pd.DataFrame | None) -> pd.DataFrame:
     merged["rtol"] = merged["rtol"].replace(-1.0, np.nan)
     merged["step"] = merged["step"].replace(-1.0, np.nan)
     return merged
+
+
+def _reference_path_series(ctx: ReportContext, table: pd.DataFrame, timing: pd.DataFrame | None) -> list:
+    """The sampled runs' reference-path (Python) CPU against their error: hollow markers, one series per method.
+
+    The sweeps run compiled; every sampled case also ran on the reference path (case list's
+    ``reference_sample``), and ``backend_cpu_timing`` holds both CPU times under the case's name.
+    """
+    cpu = ctx.table("backend_cpu_timing")
+    if cpu is None or timing is None or "case" not in timing:
+        return []
+    named = _with_cpu(table, timing, columns=("case",))
+    sampled = named.merge(cpu[cpu["study"] == STUDY][["case", "reference_cpu_s"]], on="case")
+    out = []
+    for method, runs in sampled.groupby("method", sort=False):
+        style = {"color": _style(method, "RK45")["color"], "marker": "o", "ls": "none", "mfc": "none", "ms": 7, "mew": 1.3}
+        out.append((f"{method}, reference path (sampled runs)", runs["reference_cpu_s"], runs["max_abs_dq"], style))
+    return out
 
 
 def _exudyn_series(ctx: ReportContext) -> tuple[list, str]:
@@ -82,13 +102,15 @@ def _exudyn_series(ctx: ReportContext) -> tuple[list, str]:
     return series, fmt_number(sel["t_end"].iloc[0])
 
 
-def _work_precision_figure(ctx: ReportContext, table: pd.DataFrame) -> str:
+def _work_precision_figure(ctx: ReportContext, table: pd.DataFrame, timing: pd.DataFrame | None) -> str:
     panels = [{"xlabel": "function evaluations (right-hand side) [-]", "ylabel": "max |q − q_ref| on common samples [rad]",
                "series": _series(table, "nfev"), "title": "error against evaluations", "legend_title": "method, integrator",
                "legend_loc": "below"},
               {"xlabel": "CPU time [s] (this machine)", "ylabel": "max |q − q_ref| on common samples [rad]",
-               "series": _series(table, "cpu_seconds"), "title": "error against CPU time",
+               "series": _series(table, "cpu_seconds"),
+               "title": "error against CPU time: lines compiled path,\nhollow markers reference (Python) path",
                "legend_title": "method, integrator", "legend_loc": "below"}]
+    panels[1]["series"] += _reference_path_series(ctx, table, timing)
     exudyn, horizon = _exudyn_series(ctx)
     if exudyn:
         panels.append({"xlabel": "CPU time [s] (this machine)", "ylabel": "max |q − q_ref| [rad]", "series": exudyn,
@@ -220,10 +242,13 @@ def section(ctx: ReportContext) -> list[str]:
               "by accept/reject decisions at about 70 restarts in 5 s: on another host and under a 4-ulp move of "
               "q(0) some moved by up to a factor 4 (projection, DOP853, rtol 1e-10: 4.2e-9 and 1.1e-9 rad), so read "
               "them by their decade, as the figure does (`make verify` judges them to their decade; section \"How "
-              "far the numbers reproduce\"). CPU "
-              "times are this "
-              "machine's (`timing/work_precision_timing.csv`); function evaluations are deterministic.", ""]
-    lines += [_work_precision_figure(ctx, table), ""]
+              "far the numbers reproduce\"). The sweeps run on the compiled path, so the lines of the CPU panel are the "
+              "arithmetic cost of each method; every 5th run (every run of the short order series) also ran on the "
+              "reference path, whose CPU (hollow markers) is the cost of the same method evaluated in Python, and the "
+              "two paths' trajectories are checked to agree (`tables/backend_agreement.csv`). CPU times are this "
+              "machine's (`timing/work_precision_timing.csv`, `timing/backend_cpu_timing.csv`); function evaluations "
+              "are deterministic.", ""]
+    lines += [_work_precision_figure(ctx, table, timing), ""]
     header, rows = _cheapest(table)
     lines += ["Cheapest setting of each series that reaches a given error (function evaluations):", "",
               md_table(header, rows, [False, False] + [True] * (len(header) - 2)), ""]
