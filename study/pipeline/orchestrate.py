@@ -39,10 +39,10 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     store = Store(Path(cache_root) / "runs")
     record: dict[str, Any] = {"stages": {}, "studies": {}, "case_keys": {}, "case_wall_seconds": {}}
     t0 = time.perf_counter()
-    titles = ", ".join(cl.study for cl in case_lists)
+    title = case_lists[0].study if len(case_lists) == 1 else f"cases of {len(case_lists)} studies"
     with make_executor(workers, scheduler) as executor:   # one queue for every study: no worker waits for a
         run = run_cases([c for cl in case_lists for c in cl.all_cases], store, executor,   # study's last case
-                        title=f"cases of {titles}", stream=stream)
+                        title=title, stream=stream)
     record["stages"]["run"] = time.perf_counter() - t0
     for cl in case_lists:
         names = {c.name for c in cl.all_cases}
