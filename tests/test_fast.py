@@ -7,6 +7,7 @@ The first run compiles the kernels (cached on disk under the cache folder afterw
 import numpy as np
 import pytest
 
+from handwritten import cartesian_pendulum
 from study.fast import frontend
 from study.mechanisms import initial_state, load
 from study.reference_data import tolerance
@@ -125,10 +126,42 @@ def test_unsupported_options_are_refused_by_name(kwargs, word):
         simulate("quick_return", variant="smooth_cutting", t_end=0.1, backend="compiled", **kwargs)
 
 
-def test_user_equations_are_refused():
-    ps, eom = load("quick_return", "smooth_cutting")
+PENDULUM = cartesian_pendulum()   # one object: its kernels compile once (frontend.user_model)
+
+
+@pytest.mark.parametrize("integrator, method", [("DOP853", "none"), ("RK45", "projection"), ("RK4", "baumgarte")])
+def test_user_equations_that_numba_compiles_run_compiled(integrator, method):
+    """A user's plain callables (the Cartesian pendulum, typed by hand) run in the compiled loop."""
+    eom = PENDULUM
+    q0, qd0 = np.array([1.0, 0.0]), np.array([0.0, 0.5])
+    kw = dict(t_end=2.0, integrator=integrator, method=method, rtol=RTOL, atol=ATOL,
+              step=1e-3 if integrator == "RK4" else None)
+    fast, ref = simulate(eom, q0, qd0, backend="compiled", **kw), simulate(eom, q0, qd0, **kw)
+    assert fast.meta["backend"] == "compiled" and fast.stats["nfev"] > 0
+    if integrator == "RK4":
+        assert np.abs(fast.q - ref.q).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.q).max()
+    else:
+        _agree(fast, ref, RTOL)
+
+
+def test_user_equations_numba_cannot_compile_are_refused_with_the_reason():
+    from types import SimpleNamespace
+
+    from handwritten import slider_crank
+
+    v = SimpleNamespace(**load("slider_crank", "seed")[0].values.__dict__)   # closures over an object
+    eom = slider_crank(v)
+    ps, generated = load("slider_crank", "seed")
+    st = initial_state(ps, generated)
+    with pytest.raises(ValueError, match=r"numba cannot compile the EquationsOfMotion 'slider_crank_by_hand' \(.+\).*"
+                                         r"backend='reference'"):
+        simulate(eom, st.q, st.qd, t_end=0.1, backend="compiled")
+
+
+def test_user_equations_with_what_only_generated_kernels_cover_are_refused_by_name():
+    ps, eom = load("quick_return", "smooth_cutting")   # its cutting force is a load whose work is tracked
     st = initial_state(ps, eom)
-    with pytest.raises(ValueError, match="EquationsOfMotion"):
+    with pytest.raises(ValueError, match=r"applied loads with tracked work \(applied_forces\).*backend='reference'"):
         simulate(eom, st.q, st.qd, t_end=0.1, backend="compiled")
 
 

@@ -1,7 +1,8 @@
 """Python side of the compiled path: what it supports, packing of options, segments and events, result.
 
-``simulate(..., backend='compiled')`` calls :func:`simulate_compiled`. It supports the built-in
-mechanisms (their description is needed to generate code), the ``multiplier`` acceleration solver,
+``simulate(..., backend='compiled')`` calls :func:`simulate_compiled`. It supports the described
+mechanisms (kernels generated from their description) and a user's EquationsOfMotion whose callables
+numba compiles (:mod:`study.fast.user`, which names what it cannot compile), the ``multiplier`` acceleration solver,
 every stabilization (none, baumgarte, sliding_mode with every sgn approximation, projection),
 friction None / 'regularized' / 'sign' / 'exact', and the integrators RK23, RK45, DOP853 (scipy's
 error control) and RK4. Anything else raises a ValueError naming the option: there is no silent
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from types import ModuleType
+from types import ModuleType, SimpleNamespace
 
 import numpy as np
 
@@ -56,13 +57,14 @@ class CompiledModel:
 
     Attributes
     ----------
-    module : the generated module (``evaluate``, ``indicators``, ``kinematics``)
-    p : (k,) parameter vector in ``module.PARAMETERS`` order
+    module : the generated module (``evaluate``, ``indicators``, ``kinematics``), or the same three
+        kernels of a user's equations (:func:`study.fast.user.user_kernels`)
+    p : (k,) parameter vector in ``module.PARAMETERS`` order (empty for a user's equations)
     lp : load parameters (empty: the laws' numbers are parameters in ``p``)
     n_load_indicators : switching functions of the loads
     """
 
-    module: ModuleType
+    module: ModuleType | SimpleNamespace
     p: np.ndarray
     lp: np.ndarray
     n_load_indicators: int
@@ -70,6 +72,16 @@ class CompiledModel:
 
 
 _MODELS: dict[tuple, CompiledModel] = {}
+_USER_MODELS: dict[int, tuple[EquationsOfMotion, CompiledModel]] = {}   # id -> (the equations, kept alive; model)
+
+
+def user_model(eom: EquationsOfMotion) -> CompiledModel:
+    """The compiled model of a user's equations (their callables compiled once per object)."""
+    if id(eom) not in _USER_MODELS:
+        from study.fast.user import user_kernels
+
+        _USER_MODELS[id(eom)] = (eom, CompiledModel(user_kernels(eom), np.zeros(0), np.zeros(0), 0, ()))
+    return _USER_MODELS[id(eom)][1]
 
 
 def compiled_model(ps: ParameterSet) -> CompiledModel:
@@ -108,12 +120,9 @@ def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_wo
     return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
 
 
-def check_supported(ps: ParameterSet | None, integrator: str, acceleration_solver: str, progress) -> None:
+def check_supported(integrator: str, acceleration_solver: str, progress) -> None:
     """ValueError naming every option the compiled backend does not support."""
     problems = []
-    if ps is None:
-        problems.append("eom_or_mechanism: a user's EquationsOfMotion has no symbolic description to compile; "
-                        "give the name of a described mechanism (study.params.available_mechanisms())")
     if integrator not in SUPPORTED_INTEGRATORS:
         problems.append(f"integrator={integrator!r} (compiled: {', '.join(SUPPORTED_INTEGRATORS)})")
     if acceleration_solver not in SUPPORTED_ACCELERATION_SOLVERS:
@@ -138,10 +147,12 @@ class Setup:
     n_load_modes: int
 
 
-def setup(eom: EquationsOfMotion, ps: ParameterSet, q0, qd0, method: str, friction, friction_eps, friction_sgn,
+def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
-    """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays."""
-    model = compiled_model(ps)
+    """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays.
+
+    ``ps`` None: a user's equations, whose callables are compiled as they are (:func:`user_model`)."""
+    model = user_model(eom) if ps is None else compiled_model(ps)
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
                                         **method_options)
@@ -254,7 +265,7 @@ def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, 
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
                       max_evaluations: float, min_step: float, **method_options) -> SimulationResult:
     """The compiled backend of ``study.simulate.simulate`` (arguments already checked there)."""
-    check_supported(ps, integrator, acceleration_solver, progress)
+    check_supported(integrator, acceleration_solver, progress)
     s = setup(eom, ps, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()

@@ -1,0 +1,87 @@
+"""Compiled kernels of a user's EquationsOfMotion written as plain callables.
+
+A described mechanism's kernels are generated from its description (:mod:`study.fast.codegen`). A
+user's equations have none: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
+as they are and wrapped into kernels of the generated ones' signatures
+(:mod:`study.fast.signatures`), so the same compiled loop runs them. The callables must be in the
+subset of Python and NumPy that numba compiles (numbers, arrays and math; closures over plain
+numbers, not over objects). Anything else is refused with one message that says why and names
+``backend='reference'``, which runs every EquationsOfMotion: there is no silent fallback.
+
+Not compiled (refused by name): sliding contacts with friction, switching loads (``indicators``)
+and applied loads whose work is tracked (``applied_forces``); their kernels need the description's
+point kinematics.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from numba import njit
+from numba.core.errors import NumbaError
+
+from study.fast.signatures import EVALUATE, INDICATORS, KINEMATICS
+from study.model.eom import EquationsOfMotion, _no_forces
+
+
+def _evaluate_kernel(mass, forces, phi, phi_q, gamma):
+    def evaluate(t, q, qd, mode, p, lp, M, Q, ph, J, gam, Jt, bt, powers):
+        M[:, :] = mass(q)
+        Q[:] = forces(t, q, qd)
+        if ph.size:
+            ph[:] = phi(q)
+            J[:, :] = phi_q(q)
+            gam[:] = gamma(q, qd)
+    return evaluate
+
+
+def _kinematics_kernel(mass, phi, phi_q):
+    def kinematics(q, p, ph, J, M):
+        ph[:] = phi(q)
+        J[:, :] = phi_q(q)
+        M[:, :] = mass(q)
+    return kinematics
+
+
+@njit(INDICATORS, cache=True)
+def _no_indicators(t, q, qd, p, lp, out):
+    return
+
+
+def unsupported(eom: EquationsOfMotion) -> list[str]:
+    """What of ``eom`` the compiled kernels of a user's equations do not cover (empty: all of it)."""
+    out = []
+    if eom.contacts:
+        out.append(f"{len(eom.contacts)} sliding contact(s) with friction")
+    if eom.indicators is not None:
+        out.append("switching loads (indicators)")
+    if eom.applied_forces is not _no_forces:
+        out.append("applied loads with tracked work (applied_forces)")
+    return out
+
+
+def user_kernels(eom: EquationsOfMotion) -> SimpleNamespace:
+    """``evaluate``, ``indicators`` and ``kinematics`` of a user's equations, compiled now.
+
+    Raises
+    ------
+    ValueError
+        The equations use what the kernels do not cover, or numba cannot compile a callable; the
+        message names it, gives numba's first line, and says ``backend='reference'`` runs them.
+    """
+    missing = unsupported(eom)
+    if missing:
+        raise ValueError(f"backend='compiled' cannot compile the EquationsOfMotion {eom.name!r}: it has "
+                         f"{', '.join(missing)}, which only a described mechanism's generated kernels cover; "
+                         f"use backend='reference'")
+    try:
+        f = {k: njit(getattr(eom, k)) for k in ("mass", "forces", "phi", "phi_q", "gamma")}
+        evaluate = njit(EVALUATE)(_evaluate_kernel(f["mass"], f["forces"], f["phi"], f["phi_q"], f["gamma"]))
+        kinematics = njit(KINEMATICS)(_kinematics_kernel(f["mass"], f["phi"], f["phi_q"]))
+    except NumbaError as exc:
+        first = next((line.strip() for line in str(exc).splitlines() if line.strip()), type(exc).__name__)
+        raise ValueError(f"backend='compiled': numba cannot compile the EquationsOfMotion {eom.name!r} ({first}); "
+                         "its callables must use numba's subset of Python and NumPy (numbers, arrays, math; "
+                         "closures over numbers, not over objects); use backend='reference', which runs any "
+                         "callables") from exc
+    return SimpleNamespace(evaluate=evaluate, indicators=_no_indicators, kinematics=kinematics)
