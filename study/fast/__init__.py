@@ -5,14 +5,18 @@
 cache
     Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``.
 signatures
-    The numba function types shared by the generated code and the kernels.
+    The numba function types shared by the generated code, the stabilization methods and the kernels.
+signs
+    The compiled sgn approximations (sliding-mode bias, friction laws).
 codegen
     sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``);
     the load laws are the description's expressions, compiled with the rest.
 linalg
     Small dense LU with partial pivoting.
+user
+    A user's EquationsOfMotion compiled from its callables.
 dynamics
-    Stabilization bias, multiplier solve, the coupled normal-force/friction solve, the right-hand side.
+    Constraint right-hand side (each stabilization's own compiled bias), multiplier solve, the coupled normal-force/friction solve, the right-hand side.
 steppers
     RK23/RK45/DOP853 (scipy's tableaus and error control) and RK4 steps with their dense output.
 loop
@@ -23,6 +27,15 @@ frontend
 """
 
 from study.fast import cache as _cache  # noqa: F401  (sets numba's cache folder before any kernel is defined)
-from study.fast.frontend import CompiledModel, compiled_model, simulate_compiled
 
 __all__ = ["CompiledModel", "compiled_model", "simulate_compiled"]
+
+
+def __getattr__(name: str):
+    """The frontend's names, imported when first asked for: the stabilization methods' compiled forms
+    (study.solver.stabilization) import study.fast.signs and .signatures, and the frontend imports them."""
+    if name in __all__:
+        from study.fast import frontend
+
+        return getattr(frontend, name)
+    raise AttributeError(f"module 'study.fast' has no attribute {name!r}")

@@ -16,29 +16,29 @@ W_friction (only with friction)], as in the reference.
 
 from __future__ import annotations
 
-import math
 from collections import namedtuple
 
 import numpy as np
 from numba import njit, types
 
 from study.fast.linalg import lu_factor, lu_solve
-from study.fast.signatures import EVALUATE_T, I1, V1, f8
+from study.fast.signatures import BIAS_T, EVALUATE_T, I1, V1, f8
+from study.fast.signs import sign_function
 from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
 
 # --- option layout ---------------------------------------------------------------------------
-STAB_NONE, STAB_BAUMGARTE, STAB_SLIDING, STAB_PROJECTION = 0, 1, 2, 3
 FRICTION_NONE, FRICTION_EXACT, FRICTION_REGULARIZED, FRICTION_SIGN = 0, 1, 2, 3
-CI_STAB, CI_SGN, CI_FRICTION, CI_FRICTION_SGN, CI_PROJ_MASS, CI_PROJ_MAXITER, CI_NLOADMODE, CI_CONTACT0 = range(8)
-CF_BG_DAMP, CF_BG_STIFF, CF_SM_WIDTH, CF_FRICTION_EPS, CF_PROJ_TOL, CF_HEADER = 0, 1, 2, 3, 4, 5
+CI_PROJECTS, CI_BIAS, CI_FRICTION, CI_FRICTION_SGN, CI_PROJ_MASS, CI_PROJ_MAXITER, CI_NLOADMODE, CI_CONTACT0 = range(8)
+CF_FRICTION_EPS, CF_PROJ_TOL, CF_HEADER = 0, 1, 2
+# ci: CI_PROJECTS 1 if the stabilization projects after each step; CI_BIAS the offset of its bias parameters in cf;
 # ci ends with the dimensions (nw, nc, r, m): see dimensions()
-# cf after the header: Lambda (r), K (r), k (r), mu_kinetic (nc), mu_static (nc), resistance (nc)
+# cf after the header: mu_kinetic (nc), mu_static (nc), resistance (nc), then the bias parameters
 
 # status codes
 OK, SINGULAR, PAINLEVE_NONE, PAINLEVE_MANY = 0, 1, 2, 3
 
 Workspace = namedtuple("Workspace", [
-    "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "K", "piv", "x",
+    "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "phidot", "K", "piv", "x",
     "qdd", "lam", "U", "L", "A", "b", "pivA", "fa", "best", "sigma", "best_sigma", "normal", "tol",
     "best_normal", "best_tol", "f", "vt", "stick", "s", "counters"])
 
@@ -49,7 +49,7 @@ def workspace(m, r, nc, nw):
     n = m + r
     return Workspace(
         np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m), np.zeros(r), np.zeros((r, m)), np.zeros(r),
-        np.zeros((nc, m)), np.zeros(nc), np.zeros(nw), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64),
+        np.zeros((nc, m)), np.zeros(nc), np.zeros(nw), np.zeros(r), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64),
         np.zeros(n), np.zeros(m), np.zeros(r), np.zeros((m, nc)), np.zeros((r, nc)), np.zeros((nc, nc)),
         np.zeros(nc), np.zeros(nc, np.int64), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
         np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
@@ -64,36 +64,18 @@ def dimensions(ci):
 
 
 @njit(cache=True)
-def sign_function(kind, s, width):
-    """SIGN_FUNCTIONS in order: 0 sign, 1 sat, 2 tanh, 3 arctan, 4 sqrt (width: eps or 1/c)."""
-    if kind == 0:
-        return 0.0 if s == 0.0 else (1.0 if s > 0.0 else -1.0)
-    if kind == 1:
-        return min(1.0, max(-1.0, s / width))
-    if kind == 2:
-        return math.tanh(s / width)
-    if kind == 3:
-        return (2.0 / math.pi) * math.atan(s / width)
-    return s / math.sqrt(s * s + width * width)
-
-
-@njit(cache=True)
-def constraint_rhs(ci, cf, ws):
-    """ws.c = gamma + b(Phi, Phidot) of the stabilization method (study.solver.stabilization)."""
+def constraint_rhs(bias, ci, cf, ws):
+    """ws.c = gamma + b(Phi, Phidot) of the stabilization method: its compiled counterpart ``bias``
+    (``compiled_bias`` of its class in study.solver.stabilization), parameters at cf[ci[CI_BIAS]:]."""
     r, m = ws.J.shape
-    kind = ci[CI_STAB]
     for i in range(r):
         phidot = 0.0
         for j in range(m):
             phidot += ws.J[i, j] * ws.qd[j]
-        b = 0.0
-        if kind == STAB_BAUMGARTE:
-            b = -cf[CF_BG_DAMP] * phidot - cf[CF_BG_STIFF] * ws.phi[i]
-        elif kind == STAB_SLIDING:
-            lam, K, k = cf[CF_HEADER + i], cf[CF_HEADER + r + i], cf[CF_HEADER + 2 * r + i]
-            s = phidot + lam * ws.phi[i]
-            b = -lam * phidot - K * s - k * sign_function(ci[CI_SGN], s, cf[CF_SM_WIDTH])
-        ws.c[i] = ws.gamma[i] + b
+        ws.phidot[i] = phidot
+    bias(ws.phi, ws.phidot, cf, ci[CI_BIAS], ws.c)
+    for i in range(r):
+        ws.c[i] = ws.gamma[i] + ws.c[i]
 
 
 @njit(cache=True)
@@ -115,7 +97,7 @@ def _phases(ci, cf, mode, ws):
 def _friction(ci, cf, ws, m, r):
     """The coupled normal-force / friction problem (study.solver.friction.FrictionDynamics._solve)."""
     nc = ws.Jt.shape[0]
-    off = CF_HEADER + 3 * r
+    off = CF_HEADER
     n_act = 0
     active = np.empty(nc, np.int64)
     for j in range(nc):
@@ -213,12 +195,12 @@ def _friction(ci, cf, ws, m, r):
 
 
 @njit(cache=True)
-def accelerations(evaluate, t, mode, p, lp, ci, cf, ws):
+def accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws):
     """qdd, lambda (and with friction f, v_t, N) at the state in ws.q, ws.qd; returns a status code."""
     evaluate(t, ws.q, ws.qd, mode, p, lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
     ws.counters[0] += 1
     m, r = ws.q.size, ws.phi.size
-    constraint_rhs(ci, cf, ws)
+    constraint_rhs(bias, ci, cf, ws)
     K = ws.K
     for i in range(m):
         for j in range(m):
@@ -253,13 +235,13 @@ def accelerations(evaluate, t, mode, p, lp, ci, cf, ws):
 
 
 @njit(cache=True)
-def rhs(evaluate, t, y, mode, p, lp, ci, cf, ws, dy):
+def rhs(evaluate, bias, t, y, mode, p, lp, ci, cf, ws, dy):
     """dy = [qd, qdd, load powers, friction powers f_j v_t,j]; returns a status code."""
     m = ws.q.size
     for i in range(m):
         ws.q[i] = y[i]
         ws.qd[i] = y[m + i]
-    status = accelerations(evaluate, t, mode, p, lp, ci, cf, ws)
+    status = accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws)
     for i in range(m):
         dy[i] = ws.qd[i]
         dy[m + i] = ws.qdd[i]
@@ -272,8 +254,8 @@ def rhs(evaluate, t, y, mode, p, lp, ci, cf, ws, dy):
     return status
 
 
-@njit(types.int64(EVALUATE_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
-def accelerations_entry(evaluate, t, q, qd, mode, p, lp, ci, cf, out, repeat):
+@njit(types.int64(EVALUATE_T, BIAS_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
+def accelerations_entry(evaluate, bias, t, q, qd, mode, p, lp, ci, cf, out, repeat):
     """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f]. For tests and timing."""
     m, r, nc, nw = dimensions(ci)
     ws = workspace(m, r, nc, nw)
@@ -282,7 +264,7 @@ def accelerations_entry(evaluate, t, q, qd, mode, p, lp, ci, cf, out, repeat):
         for i in range(m):
             ws.q[i] = q[i]
             ws.qd[i] = qd[i]
-        status = accelerations(evaluate, t, mode, p, lp, ci, cf, ws)
+        status = accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws)
     for i in range(m):
         out[i] = ws.qdd[i]
     for k in range(r):

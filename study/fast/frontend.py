@@ -23,7 +23,7 @@ import numpy as np
 from study.errors import NonFiniteError, RunBoundError
 from study.fast.codegen import generated_module
 from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
-                                 STAB_BAUMGARTE, STAB_NONE, STAB_PROJECTION, STAB_SLIDING, accelerations_entry)
+                                 accelerations_entry)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
                              FAIL_STALL, FAIL_STEP, integrate_segment)
 from study.fast.steppers import METHOD_IDS, tableau
@@ -36,13 +36,11 @@ from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
-from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS, Stabilization
+from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
 SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
-_SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}  # order of dynamics.sign_function
-_STAB_IDS = {"none": STAB_NONE, "baumgarte": STAB_BAUMGARTE, "sliding_mode": STAB_SLIDING,
-             "projection": STAB_PROJECTION}
+_SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}  # order of study.fast.signs.sign_function
 _FRICTION_IDS = {None: FRICTION_NONE, "exact": FRICTION_EXACT, "regularized": FRICTION_REGULARIZED,
                  "sign": FRICTION_SIGN}
 _FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
@@ -98,25 +96,34 @@ def compiled_model(ps: ParameterSet) -> CompiledModel:
     return _MODELS[key]
 
 
+def compiled_bias(stabilization: Stabilization):
+    """The compiled counterpart of a stabilization's bias: its class's own ``compiled_bias``.
+
+    A class that does not define one itself (e.g. a user's subclass that changes ``bias`` only) is
+    refused by name: the inherited compiled form would not be its bias.
+    """
+    cls = type(stabilization)
+    if cls.__dict__.get("compiled_bias") is None:
+        raise ValueError(f"backend='compiled': the stabilization {cls.__name__} (name {stabilization.name!r}) does "
+                         f"not define its own compiled_bias (the compiled form of its bias, signature "
+                         f"study.fast.signatures.BIAS) and compiled_parameters; define them in the class, or use "
+                         f"backend='reference'")
+    return cls.compiled_bias
+
+
 def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,
                  n_load_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``."""
     r, nc = eom.n_constraints, len(eom.contacts)
     s = stabilization
     friction = None if law is None else law.name
-    if type(s) not in STABILIZATIONS.values():  # a user's subclass: its bias is not the compiled one
-        raise ValueError(f"backend='compiled' has no compiled counterpart of the stabilization {type(s).__name__} "
-                         f"(name {s.name!r}); compiled: {', '.join(_STAB_IDS)}; use backend='reference'")
-    ci = [_STAB_IDS[s.name], _SIGN_IDS.get(getattr(s, "sgn", "sign"), 0), _FRICTION_IDS[friction],
-          _SIGN_IDS.get(getattr(law, "sgn", "sign"), 0), int(getattr(s, "weighting", "") == "mass"),
-          int(getattr(s, "max_iter", 0)), n_load_modes]
-    ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
-    d, omega = getattr(s, "d", 0.0), getattr(s, "omega", 0.0)
-    cf = [2.0 * d * omega, omega ** 2, getattr(s, "width", 1.0), getattr(law, "eps", 1.0), getattr(s, "tol", 0.0)]
-    for key in ("Lambda", "K", "k"):
-        cf += list(np.broadcast_to(np.asarray(getattr(s, key, 0.0), dtype=float), (r,)))
+    cf = [getattr(law, "eps", 1.0), getattr(s, "tol", 0.0)]
     cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
     cf += [c.resistance for c in eom.contacts]
+    ci = [int(s.projects), len(cf), _FRICTION_IDS[friction], _SIGN_IDS.get(getattr(law, "sgn", "sign"), 0),
+          int(getattr(s, "weighting", "") == "mass"), int(getattr(s, "max_iter", 0)), n_load_modes]
+    ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
+    cf += [float(x) for x in s.compiled_parameters(r)]
     return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
 
 
@@ -145,6 +152,7 @@ class Setup:
     y0: np.ndarray
     switching: StickSlipSwitching | None
     n_load_modes: int
+    bias: object   # the stabilization's compiled_bias
 
 
 def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
@@ -165,14 +173,14 @@ def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str,
         raise ValueError(f"backend='compiled': {dyn.n_load_modes} load switching functions in the equations, "
                          f"{n_load} in the compiled description")
     ci, cf = pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load)
-    return Setup(model, dyn, ci, cf, y0, switching, n_load)
+    return Setup(model, dyn, ci, cf, y0, switching, n_load, compiled_bias(dyn.stabilization))
 
 
 def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.ndarray:
     """[qdd, lambda, N, f] at one state from the compiled kernels (``repeat`` times, for timing)."""
     m, r, nc = s.dyn.eom.n_coordinates, s.dyn.eom.n_constraints, len(s.dyn.eom.contacts)
     out = np.zeros(m + r + 2 * nc)
-    status = accelerations_entry(s.model.module.evaluate, float(t), np.ascontiguousarray(q, dtype=float),
+    status = accelerations_entry(s.model.module.evaluate, s.bias, float(t), np.ascontiguousarray(q, dtype=float),
                                  np.ascontiguousarray(qd, dtype=float), np.asarray(mode, dtype=np.int64),
                                  s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
     if status != 0:
@@ -211,7 +219,7 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     first = float(step) if step is not None else 0.0
     while True:
         outcome, t_reached, i_event = integrate_segment(
-            model.module.evaluate, model.module.indicators, model.module.kinematics, METHOD_IDS[integrator],
+            model.module.evaluate, s.bias, model.module.indicators, model.module.kinematics, METHOD_IDS[integrator],
             arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
             y_out, mode_out, counters, y_end, bounds)

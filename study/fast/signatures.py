@@ -19,6 +19,10 @@ INDICATORS = types.void(f8, V1, V1, V1, V1, V1)
 #: kinematics(q, p, phi, J, M): constraints, their Jacobian and the mass matrix (projection)
 KINEMATICS = types.void(V1, V1, V1, V2, V2)
 
+#: bias(phi, phidot, cf, offset, out): a stabilization's b(Phi, Phidot), its parameters at cf[offset:]
+BIAS = types.void(V1, V1, V1, i8, V1)
+
 EVALUATE_T = types.FunctionType(EVALUATE)
+BIAS_T = types.FunctionType(BIAS)
 INDICATORS_T = types.FunctionType(INDICATORS)
 KINEMATICS_T = types.FunctionType(KINEMATICS)

@@ -18,7 +18,8 @@ from study.sources import source_files, source_hash
 
 # Source that determines a case's result, per engine (folders or files under study/). The report,
 # the studies' summaries and the command line do not change a result and are left out.
-_COMMON_CODE = ("model", "solver", "mechanisms", "params.py", "results.py", "reference_data.py")
+_COMMON_CODE = ("model", "solver", "mechanisms", "params.py", "results.py", "reference_data.py",
+                "fast/signatures.py", "fast/signs.py")   # the stabilization methods' compiled forms (solver/) use these
 CODE_PATHS = {
     "inhouse": _COMMON_CODE + ("simulate.py", "fast"),
     "exudyn": _COMMON_CODE + ("exudyn_models",),

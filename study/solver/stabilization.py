@@ -10,6 +10,13 @@ constraint dynamics (Phi_ddot = Phi_q qdd - gamma):
                     Phi_q qd = 0 (minimum-norm or mass-weighted Gauss-Newton).
 
 The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17).
+
+Each method is one class for both backends: ``bias`` is its reference (NumPy) form, and
+``compiled_bias`` its compiled counterpart, a numba function of signature
+``study.fast.signatures.BIAS`` that the compiled loop calls with the parameters
+``compiled_parameters(r)`` packed into its options (``study.fast.frontend.pack_options``). A new
+method (or a subclass that changes ``bias``) runs compiled once its class defines both; a class that
+does not define its own ``compiled_bias`` is refused by name on the compiled path.
 """
 
 from __future__ import annotations
@@ -19,7 +26,10 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numba import njit
 
+from study.fast.signatures import BIAS
+from study.fast.signs import sign_function
 from study.reference_data import tolerance
 
 from study.model.eom import EquationsOfMotion
@@ -75,9 +85,14 @@ class Stabilization:
 
     name = ""
     projects = False
+    compiled_bias = None   # the compiled form of bias (signature study.fast.signatures.BIAS), per class
 
     def bias(self, phi: Array, phidot: Array) -> Array:
         return np.zeros_like(phi)
+
+    def compiled_parameters(self, r: int) -> list[float]:
+        """The numbers ``compiled_bias`` reads at cf[offset:], for r constraints."""
+        return []
 
     def project(self, eom: EquationsOfMotion, q: Array, qd: Array) -> tuple[Array, Array, bool]:
         return q, qd, False
@@ -86,9 +101,32 @@ class Stabilization:
         return {"stabilization": self.name}
 
 
+@njit(BIAS, cache=True)
+def _zero_bias(phi, phidot, cf, off, out):
+    for i in range(phi.size):
+        out[i] = 0.0
+
+
+@njit(BIAS, cache=True)
+def _baumgarte_bias(phi, phidot, cf, off, out):
+    for i in range(phi.size):   # cf[off] = 2 d w, cf[off + 1] = w^2
+        out[i] = -cf[off] * phidot[i] - cf[off + 1] * phi[i]
+
+
+@njit(BIAS, cache=True)
+def _sliding_mode_bias(phi, phidot, cf, off, out):
+    r = phi.size   # cf[off:] = sgn id, width, Lambda (r), K (r), k (r)
+    kind, width = int(cf[off]), cf[off + 1]
+    for i in range(r):
+        lam, K, k = cf[off + 2 + i], cf[off + 2 + r + i], cf[off + 2 + 2 * r + i]
+        s = phidot[i] + lam * phi[i]
+        out[i] = -lam * phidot[i] - K * s - k * sign_function(kind, s, width)
+
+
 @dataclass(frozen=True)
 class NoStabilization(Stabilization):
     name: str = "none"
+    compiled_bias = staticmethod(_zero_bias)
 
 
 @dataclass(frozen=True)
@@ -117,6 +155,11 @@ class Baumgarte(Stabilization):
 
     def bias(self, phi, phidot):
         return -2.0 * self.d * self.omega * phidot - self.omega**2 * phi
+
+    compiled_bias = staticmethod(_baumgarte_bias)
+
+    def compiled_parameters(self, r):
+        return [2.0 * self.d * self.omega, self.omega ** 2]
 
     def settings(self):
         return {"stabilization": self.name, "d": self.d, "omega": self.omega}
@@ -154,6 +197,12 @@ class SlidingMode(Stabilization):
         s = phidot + lam * phi
         return -lam * phidot - K * s - k * SIGN_FUNCTIONS[self.sgn](s, self.width)
 
+    compiled_bias = staticmethod(_sliding_mode_bias)
+
+    def compiled_parameters(self, r):
+        per_row = [np.broadcast_to(np.asarray(v, dtype=float), (r,)).tolist() for v in (self.Lambda, self.K, self.k)]
+        return [float(list(SIGN_FUNCTIONS).index(self.sgn)), self.width] + [x for row in per_row for x in row]
+
     def settings(self):
         return {"stabilization": self.name, "Lambda": self.Lambda, "K": self.K, "k": self.k,
                 "sgn": self.sgn, "width": self.width}
@@ -174,6 +223,7 @@ class Projection(Stabilization):
     max_iter: int = 10
     name: str = "projection"
     projects: bool = True
+    compiled_bias = staticmethod(_zero_bias)   # b = 0; the projection after each step is study.fast.project
 
     def __post_init__(self) -> None:
         if self.weighting not in ("minimum_norm", "mass"):
