@@ -144,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         wp, ratio = saved("work_precision.csv"), saved("ratio_inhouse_exudyn.csv")
     if "sweep" in only or "qr20" in only:   # references.csv: rows of the sections rerun replaced, the others kept
-        old = saved("references.csv") if (out / "references.csv").exists() else pd.DataFrame(columns=["mechanism", "t_end"])
+        old = (saved("references.csv") if (out / "references.csv").exists()
+               else pd.DataFrame(columns=["mechanism", "t_end"]))
         of_qr20 = old.t_end == (2.0 if args.quick else T2_T_END)
         rerun = (of_qr20 & ("qr20" in only)) | (~of_qr20 & old.mechanism.isin(mechs) & ("sweep" in only))
         new = ([sweep_refs] if "sweep" in only else []) + ([qr_refs] if "qr20" in only else [])

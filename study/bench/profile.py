@@ -39,7 +39,8 @@ def overhead_profile(qr20: pd.DataFrame, wp: pd.DataFrame, accel: pd.DataFrame, 
     rows = []
     for mech, variant, t_end, extra, rtol, eval_us in runs:
         cpu, r = timed(inhouse_case(mech, variant, t_end, extra, "compiled", "DOP853", rtol, "profile"), repeats)
-        start, _ = timed(inhouse_case(mech, variant, OUTPUT_STEPS[mech], extra, "compiled", "DOP853", rtol, "profile"), repeats)
+        start, _ = timed(inhouse_case(mech, variant, OUTPUT_STEPS[mech], extra, "compiled", "DOP853", rtol, "profile"),
+                         repeats)   # stopped after one output step: the start-up
         call_us = float(call.loc[mech, "us_per_evaluation"]) if mech in call.index else np.nan
         nfev = int(r.stats["nfev"])
         ev = int(r.stats.get("events", 0))

@@ -16,7 +16,8 @@ linalg
 user
     A user's EquationsOfMotion compiled from its callables.
 dynamics
-    Constraint right-hand side (each stabilization's own compiled bias), multiplier solve, the coupled normal-force/friction solve, the right-hand side.
+    Constraint right-hand side (each stabilization's own compiled bias), multiplier solve, the coupled
+    normal-force/friction solve, the right-hand side.
 steppers
     RK23/RK45/DOP853 (scipy's tableaus and error control) and RK4 steps with their dense output.
 loop

@@ -49,7 +49,8 @@ def workspace(m, r, nc, nw):
     n = m + r
     return Workspace(
         np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m), np.zeros(r), np.zeros((r, m)), np.zeros(r),
-        np.zeros((nc, m)), np.zeros(nc), np.zeros(nw), np.zeros(r), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64),
+        np.zeros((nc, m)), np.zeros(nc), np.zeros(nw), np.zeros(r), np.zeros(r), np.zeros((n, n)),
+        np.zeros(n, np.int64),
         np.zeros(n), np.zeros(m), np.zeros(r), np.zeros((m, nc)), np.zeros((r, nc)), np.zeros((nc, nc)),
         np.zeros(nc), np.zeros(nc, np.int64), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),
         np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc),

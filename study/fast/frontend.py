@@ -36,11 +36,10 @@ from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
-from study.solver.stabilization import SIGN_FUNCTIONS, Stabilization
+from study.solver.stabilization import SIGN_IDS, Stabilization
 
 SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
 SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
-_SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}  # order of study.fast.signs.sign_function
 _FRICTION_IDS = {None: FRICTION_NONE, "exact": FRICTION_EXACT, "regularized": FRICTION_REGULARIZED,
                  "sign": FRICTION_SIGN}
 _FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
@@ -120,7 +119,7 @@ def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_wo
     cf = [getattr(law, "eps", 1.0), getattr(s, "tol", 0.0)]
     cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
     cf += [c.resistance for c in eom.contacts]
-    ci = [int(s.projects), len(cf), _FRICTION_IDS[friction], _SIGN_IDS.get(getattr(law, "sgn", "sign"), 0),
+    ci = [int(s.projects), len(cf), _FRICTION_IDS[friction], SIGN_IDS.get(getattr(law, "sgn", "sign"), 0),
           int(getattr(s, "weighting", "") == "mass"), int(getattr(s, "max_iter", 0)), n_load_modes]
     ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
     cf += [float(x) for x in s.compiled_parameters(r)]

@@ -66,6 +66,8 @@ SIGN_FUNCTIONS: dict[str, Callable[[Array, float], Array]] = {
     "arctan": _arctan,
     "sqrt": _sqrt,
 }
+#: name -> the id of the same approximation in the compiled code (study.fast.signs.sign_function, same order)
+SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}
 
 
 def _positive(owner: str, **values: float) -> None:
@@ -201,7 +203,7 @@ class SlidingMode(Stabilization):
 
     def compiled_parameters(self, r):
         per_row = [np.broadcast_to(np.asarray(v, dtype=float), (r,)).tolist() for v in (self.Lambda, self.K, self.k)]
-        return [float(list(SIGN_FUNCTIONS).index(self.sgn)), self.width] + [x for row in per_row for x in row]
+        return [float(SIGN_IDS[self.sgn]), self.width] + [x for row in per_row for x in row]
 
     def settings(self):
         return {"stabilization": self.name, "Lambda": self.Lambda, "K": self.K, "k": self.k,
