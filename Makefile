@@ -3,44 +3,42 @@ PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-SLOW_PASSED := .cache/slow-tests.passed
 # sympy's simplification (errata table, derivation) takes paths that depend on Python's hash order;
-# a fixed seed makes its run time and output the same on every run (one random seed once took
-# minutes instead of seconds in the errata check).
+# a fixed seed makes its run time and output the same on every run.
 export PYTHONHASHSEED := 0
-SOURCES := $(shell find study tests reference -type f -not -name '*.pyc') pyproject.toml
 
-.PHONY: test reproduce run errata initial report bench browser check-report clean-cache verify
+.PHONY: test reproduce verify emulate run errata initial report bench browser check-report clean-cache lock
 
-$(STAMP): pyproject.toml
+# Exact versions from requirements.lock, then the package itself without resolving anything again.
+$(STAMP): requirements.lock pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -r requirements.lock
+	$(PY) -m pip install --quiet --no-deps -e .
 	touch $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest
 
-# Every study (cached cases are reused), the report, then the slow cross-validation tests.
+# Every study (cached cases are reused), then the report. Fails only if a case fails that its case list does not
+# expect to fail, or if the report cannot be built; what the checks find is written into the report.
 # WORKERS=N sets the local worker processes; SCHEDULER=tcp://host:8786 runs the cases on a Dask cluster.
 reproduce: $(STAMP)
 	$(PY) -m study reproduce $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
-	@$(MAKE) --no-print-directory $(SLOW_PASSED)
-	@echo "report: $(CURDIR)/reports/index.md and $(CURDIR)/reports/report.html"
 
-# The slow tests (long cross-validation runs) rerun whenever the code, the tests, the reference
-# data or the environment changed since they last passed; otherwise their pass is reused.
-$(SLOW_PASSED): $(STAMP) $(SOURCES)
-	$(PY) -m pytest -q -m slow
-	@mkdir -p $(dir $@) && touch $@
-
-# Regenerate every table and compare it with the snapshot in reports/tables (per-column rules and their reasons:
-# reference/verify.toml; prints the worst difference per table; fails on any difference beyond its rule), then the
-# conditioning check: every in-house case rerun from a state moved by +-4 ulps (reports/tables/perturbation_check.csv).
-# With an empty cache (a fresh clone, or after make clean-cache) every case is computed again.
+# The reproducibility check: the slow tests (long cross-validation runs, the browser check when Chromium is there),
+# every table regenerated and compared with the snapshot in reports/tables by the rules of reference/verify.toml,
+# then every in-house case rerun from a state moved by +-4 ulps (reports/tables/perturbation_check.csv).
 verify: $(STAMP)
-	$(PY) -m study verify $(if $(WORKERS),--workers $(WORKERS))
-	$(PY) -m study verify --perturb $(if $(WORKERS),--workers $(WORKERS))
+	$(PY) -m pytest -m slow
+	$(PY) -m study verify $(if $(WORKERS),--workers $(WORKERS)) $(if $(OUT),--out $(OUT))
+	$(PY) -m study verify --perturb $(if $(WORKERS),--workers $(WORKERS)) $(if $(OUT),--out $(OUT))
+
+# Other hosts emulated on this one: the fast tests, the slow tests and `study verify` under other floating-point
+# code paths (numba's target CPU, NumPy's dispatched kernels, OpenBLAS's core type), each with a cache of its own.
+# HOSTS=<names> picks configurations from study/emulate.py; TARGETS=<make targets> what runs under each.
+emulate: $(STAMP)
+	$(PY) -m study.emulate $(if $(HOSTS),--hosts $(HOSTS)) $(if $(TARGETS),--targets $(TARGETS))
 
 run: $(STAMP)
 	$(PY) -m study run $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
@@ -55,7 +53,7 @@ browser:
 	@command -v chromium >/dev/null 2>&1 || { apt-get update -qq && apt-get install -y -qq chromium; }
 
 # Open reports/report.html in headless Chromium: images, raw Markdown, math sizes, overflow;
-# screenshots -> reports/screenshots/ (part of the slow tests that `make reproduce` runs).
+# screenshots -> reports/screenshots/ (part of the slow tests that `make verify` runs).
 check-report: $(STAMP)
 	$(PY) -m pytest -q -m slow -k browser
 
@@ -70,3 +68,11 @@ report: $(STAMP)
 
 clean-cache:
 	rm -rf .cache
+
+# Resolve pyproject.toml's ranges again in a new virtual environment and write the exact versions to requirements.lock.
+lock:
+	rm -rf .lock-venv && $(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/python -m pip install --quiet --upgrade pip
+	.lock-venv/bin/python -m pip install --quiet '.[test]'
+	{ sed -n '/^#/p' requirements.lock; .lock-venv/bin/python -m pip freeze --exclude study; } > requirements.lock.new
+	mv requirements.lock.new requirements.lock && rm -rf .lock-venv

@@ -23,8 +23,12 @@ REFERENCE = dict(method="projection", integrator="DOP853", rtol=tolerance("refer
                  atol=tolerance("reference_atol"))
 
 
+LARGE = {("n_four_bar", "n20"), ("n_four_bar", "n40")}   # 5-20 s each: with the slow tests (make verify)
+
+
 def _variants():
-    return [(m, v) for m in available_mechanisms() for v in available_variants(m)]
+    return [pytest.param(m, v, marks=pytest.mark.slow) if (m, v) in LARGE else (m, v)
+            for m in available_mechanisms() for v in available_variants(m)]
 
 
 @pytest.mark.parametrize("mechanism,variant", _variants())

@@ -201,20 +201,19 @@ def test_stall_bound_stops_where_the_reference_path_stops():
     assert stops["compiled"][0] == pytest.approx(stops["reference"][0], rel=rel)
 
 
-def test_non_finite_values_stop_the_run_where_the_reference_path_stops():
+def test_non_finite_values_stop_the_run_on_both_paths():
     """RK4 with a step far too large for the quick-return (h = 0.05 s against a crank period of ~0.6 s) blows
-    up. The reference path checks every evaluation, forces and multipliers included, and names the stage time
-    of the first non-finite value; the compiled loop checks the right-hand side at the end of each step, so it
-    stops at most one step later (measured: one step later). The step grid restarts at each located switch, whose times agree to
-    fast_event_time_agreement."""
+    up. Both paths must stop with NonFiniteError naming a time inside the run. When the blow-up is detected is
+    not asserted: the growth is exponential, so the step at which a value first overflows is decided by the last
+    bits of everything before it and differs between hosts and between the two paths."""
     from study.errors import NonFiniteError
 
-    stops = {}
+    t_end = 2.0
     for backend in ("reference", "compiled"):
         with pytest.raises(NonFiniteError, match="non-finite") as info:
-            simulate("quick_return", t_end=2.0, integrator="RK4", step=0.05, backend=backend)
-        stops[backend] = info.value.t
-    assert stops["reference"] <= stops["compiled"] <= stops["reference"] + 0.05 + tolerance("fast_event_time_agreement")
+            simulate("quick_return", t_end=t_end, integrator="RK4", step=0.05, backend=backend)
+        assert 0.0 < info.value.t < t_end, (backend, info.value.t)
+        assert f"t = {info.value.t:.9g} s" in str(info.value), (backend, str(info.value))
 
 
 @pytest.mark.parametrize("integrator, rtol", [("DOP853", 1e-4), ("RK45", 1e-4), ("DOP853", 1e-5)])

@@ -1,76 +1,14 @@
 """The modules under ``study/`` import each other without a cycle, imports inside functions included.
 
-Every ``.py`` file under ``study/`` is parsed with :mod:`ast`; every ``import study...`` and
-``from ... import ...`` anywhere in it (top level, inside functions, under ``if TYPE_CHECKING``) that
-names a ``study`` module is an edge. Relative imports are resolved against the importing module's
-package. ``from study.x import y`` is an edge to ``study.x.y`` when that is a module, else to
-``study.x``.
-
-One kind of edge is left out: a package's ``__init__`` importing from its own submodules (re-exporting
-them). Importing ``study.p.sub`` runs ``study/p/__init__.py`` first, so every submodule "imports" its
-package; with the re-export edge that would make every re-exporting package a cycle, although Python
-resolves it (the package finishes importing its submodules before anything uses it). An ``__init__``
-importing anything else (another package, a sibling's submodule) is an edge like any other.
+The graph is :func:`study.imports.import_graph` (every ``import`` of a ``study`` module anywhere in a file, read
+with :mod:`ast`; a package re-exporting its own submodules is not an edge, see that module).
 """
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
-
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "study"
-
-
-def module_names() -> dict[str, Path]:
-    """Dotted module name -> file, for every .py file under study/ (a package is its __init__)."""
-    names = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
-        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
-        if parts[-1] == "__init__":
-            parts = parts[:-1]
-        names[".".join(parts)] = path
-    return names
-
-
-def imported_modules(name: str, path: Path, modules: set[str]) -> set[str]:
-    """The study modules that module ``name`` (file ``path``) imports anywhere in its body."""
-    is_package = path.name == "__init__.py"
-    package = name if is_package else name.rpartition(".")[0]
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
-        if isinstance(node, ast.Import):
-            targets = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - (node.level - 1)]
-                if node.level - 1 > len(package.split(".")) - 1:
-                    raise ValueError(f"{path}: relative import beyond the top package (level {node.level})")
-                stem = ".".join(base + ([node.module] if node.module else []))
-            else:
-                stem = node.module
-            targets = [f"{stem}.{alias.name}" if f"{stem}.{alias.name}" in modules else stem
-                       for alias in node.names]
-        else:
-            continue
-        for target in targets:
-            # "import study.a.b" binds study.a.b; the nearest module that exists is the edge's end
-            while target and target not in modules:
-                target = target.rpartition(".")[0]
-            if not target or not target.startswith("study"):
-                continue
-            if is_package and target.startswith(name + "."):
-                continue  # a package re-exporting its own submodule (see the module docstring)
-            if target != name:
-                found.add(target)
-    return found
-
-
-def import_graph() -> dict[str, set[str]]:
-    files = module_names()
-    return {name: imported_modules(name, path, set(files)) for name, path in files.items()}
+from study.imports import PACKAGE, import_graph, imported_modules
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:

@@ -321,42 +321,39 @@ sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:fric
         pl.load_case_list(path)
 
 
-# Modules a run imports that cannot change its result: error types, file checksums, the hasher itself.
-_KEY_EXEMPT = {"errors.py", "integrity.py", "sources.py"}
-
-
-def _imported_files(start: str) -> set:
-    """Files of every study module ``start`` imports, transitively (function-level imports included)."""
-    import ast
-
+@pytest.mark.parametrize("engine", ["inhouse", "exudyn"])
+def test_case_key_covers_every_module_a_run_imports(engine):
+    """A case's key hashes the source of every module reachable from its engine's entry modules: imports inside
+    functions (the run helpers in study/solver/run.py), and the mechanisms that study.mechanisms imports by name
+    at run time; not the report or the command line."""
+    from study.imports import dependencies
     from study.sources import PACKAGE_ROOT
 
-    def file_of(name):
-        p = PACKAGE_ROOT.joinpath(*name.split(".")[1:])
-        return p / "__init__.py" if p.is_dir() else p.with_suffix(".py")
-
-    seen, todo = set(), [start]
-    while todo:
-        name = todo.pop()
-        if name in seen or name == "study" or not file_of(name).exists():  # 'study': the public re-exports
-            continue
-        seen.add(name)
-        for node in ast.walk(ast.parse(file_of(name).read_text())):
-            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "study":
-                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
-            elif isinstance(node, ast.Import):
-                todo += [a.name for a in node.names if a.name.split(".")[0] == "study"]
-    return {file_of(m).resolve() for m in seen}
+    covered = {str(p.relative_to(PACKAGE_ROOT)) for p in dependencies(*pl.ENTRY_MODULES[engine])}
+    assert {"model/derive.py", "solver/friction/contact.py", "mechanisms/andrews.py", "mechanisms/quick_return.py",
+            "params.py", "pipeline/execute.py"} <= covered
+    if engine == "inhouse":
+        assert {"fast/loop.py", "solver/run.py", "solver/assemble.py"} <= covered
+    else:
+        assert "exudyn_models/translate.py" in covered
+    assert not {p for p in covered if p.startswith(("report/", "studies/", "cli.py"))}
 
 
-@pytest.mark.parametrize("engine, start", [("inhouse", "study.simulate"), ("exudyn", "study.exudyn_models")])
-def test_case_key_covers_every_module_a_run_imports(engine, start):
-    """A case's key hashes the source of every module its run imports (e.g. the run helpers in
-    study/solver/run.py and assemble.py, shared by both in-house backends), so editing one reruns the case."""
-    from study.sources import PACKAGE_ROOT, source_files
+def test_editing_an_imported_module_changes_the_key(tmp_path, monkeypatch):
+    """The key follows the import graph: a planted package whose entry imports a helper inside a function."""
+    from study import imports
 
-    covered = {p.resolve() for p in source_files(*pl.CODE_PATHS[engine])}
-    missing = sorted(str(p.relative_to(PACKAGE_ROOT)) for p in _imported_files(start) - covered)
-    assert [m for m in missing if m not in _KEY_EXEMPT] == []
-    assert {"solver/run.py", "solver/assemble.py", "solver/friction/contact.py"} <= {
-        str(p.relative_to(PACKAGE_ROOT)) for p in covered}
+    pkg = tmp_path / "study"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "entry.py").write_text("def f():\n    from study.sub import helper\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "helper.py").write_text("X = 1\n")
+    (pkg / "unused.py").write_text("Y = 1\n")
+    monkeypatch.setattr(imports, "PACKAGE", pkg)
+    imports.dependencies.cache_clear()
+    try:
+        found = {p.relative_to(pkg).as_posix() for p in imports.dependencies("study.entry")}
+    finally:
+        imports.dependencies.cache_clear()
+    assert found == {"entry.py", "sub/__init__.py", "sub/helper.py"}

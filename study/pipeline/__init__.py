@@ -18,7 +18,7 @@ from study.pipeline.cases import (BACKENDS, CASES_DIR, ENGINES, SAMPLE_SUFFIX, C
                                   find_one, load_case_list, load_case_lists)
 from study.pipeline.execute import Progress, RunSummary, run_case, run_cases
 from study.pipeline.executors import InlineExecutor, environment_workers, make_executor
-from study.pipeline.keys import CODE_PATHS, NUMERIC_PACKAGES, code_version, parameter_hash
+from study.pipeline.keys import ENTRY_MODULES, NUMERIC_PACKAGES, code_version, parameter_hash
 from study.pipeline.orchestrate import PIPELINE_RECORD, run_pipeline, save_record
 from study.pipeline.store import CorruptResult, MissingResult, Store
 from study.pipeline.summaries import (backend_agreement, backend_cpu, failures_table, sample_agreement, summarize,
@@ -26,7 +26,7 @@ from study.pipeline.summaries import (backend_agreement, backend_cpu, failures_t
 from study.pipeline.tables import TABLE_FLOAT_FORMAT, read_table, write_tables
 
 __all__ = [
-    "BACKENDS", "CASES_DIR", "CODE_PATHS", "ENGINES", "NUMERIC_PACKAGES", "PIPELINE_RECORD", "SAMPLE_SUFFIX",
+    "BACKENDS", "CASES_DIR", "ENGINES", "ENTRY_MODULES", "NUMERIC_PACKAGES", "PIPELINE_RECORD", "SAMPLE_SUFFIX",
     "TABLE_FLOAT_FORMAT", "Case", "CaseList", "CaseListError", "CorruptResult", "InlineExecutor", "MissingResult",
     "Progress", "RunSummary", "Store", "backend_agreement", "backend_cpu", "code_version", "environment_workers",
     "failures_table", "find", "find_one", "load_case_list", "load_case_lists", "make_executor", "parameter_hash",

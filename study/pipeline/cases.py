@@ -266,8 +266,22 @@ def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case
     if g.get("backend") != "compiled":
         raise CaseListError(f"{where}: reference_sample needs backend = 'compiled' (it samples a compiled group)")
     compiled = [c for c in cases if c.kwargs.get("backend") == "compiled"]
-    return [(c, Case(c.study, c.group + SAMPLE_SUFFIX, c.engine, c.mechanism, c.variant, c.t_end,
+    return [(c, Case(c.study, c.group + SAMPLE_SUFFIX, c.engine, c.mechanism, c.variant, sample_horizon(c),
                      tuple(sorted({**c.kwargs, "backend": "reference"}.items())), c.labels)) for c in compiled[::n]]
+
+
+def sample_horizon(case: Case) -> float:
+    """The horizon of a sampled case's reference-path twin: the case's own, cut to ``backend_sample_horizon``
+    (an adaptive run) or to 300 steps (a fixed-step run), the horizons the agreement bounds' reasons assume
+    (reference/tolerances.toml)."""
+    from study.reference_data import tolerance
+
+    step = case.kwargs.get("step")
+    limit = tolerance("backend_sample_horizon") if step is None else FIXED_STEP_SAMPLE_STEPS * float(step)
+    return min(float(case.t_end), limit)
+
+
+FIXED_STEP_SAMPLE_STEPS = 300   # fast_fixed_step_agreement's reason (reference/tolerances.toml)
 
 
 def load_case_list(path: Path) -> CaseList:

@@ -23,7 +23,10 @@ from study.results import SimulationResult
 from study.solver.accelerations import Multiplier
 
 MECHANISMS = tuple(available_mechanisms())
-CASES = [(name, variant) for name in MECHANISMS for variant in available_variants(name)]
+# The N-four-bar's largest sizes take 5-20 s each: they run with the slow tests (make verify).
+LARGE = {("n_four_bar", "n20"), ("n_four_bar", "n40")}
+CASES = [pytest.param(name, variant, marks=pytest.mark.slow) if (name, variant) in LARGE else (name, variant)
+         for name in MECHANISMS for variant in available_variants(name)]
 
 
 def tol(key: str) -> float:

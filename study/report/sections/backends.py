@@ -26,16 +26,19 @@ def section(ctx: ReportContext) -> list[str]:
     per_study = ", ".join(f"{study} {int(ok[g.index].sum())} of {len(g)}" for study, g in agree.groupby("study", sort=True))
     lines += [f"The sweeps marked `backend = \"compiled\"` in the case lists run on the compiled path (numba code "
               f"generated from the same equations); every n-th of their cases also ran on the reference path. "
-              f"**{int(ok.sum())} of {len(agree)} sampled pairs agree** over the full horizon within their bound "
-              f"({per_study}). The bound of an adaptive run is `adaptive_global_error_factor` × rtol × max|q| "
-              "(`reference/tolerances.toml`): the global error each run is expected to stay within; a fixed-step "
-              "pair takes the same steps, so only round-off may differ (`fast_fixed_step_agreement`).", ""]
+              f"**{int(ok.sum())} of {len(agree)} sampled pairs agree** within their bound ({per_study}), compared "
+              "on the reference-path run's horizon: the case's own, cut to `backend_sample_horizon` (an adaptive "
+              "run) or to 300 steps (a fixed-step run), the horizons the bounds' reasons assume "
+              "(`reference/tolerances.toml`). The bound of an adaptive pair is 2 × `adaptive_global_error_factor` × "
+              "rtol × max|q|: each run is expected to stay within the global error of its tolerance of the exact "
+              "solution; a fixed-step pair takes the same steps, so only round-off may differ "
+              "(`fast_fixed_step_agreement`).", ""]
     bad = agree[~ok]
     if len(bad):
         rows = [[r["study"], r["case"], fmt_number(r["max_abs_dq"]), fmt_number(r["bound"]),
                  fmt_number(r["max_abs_dq"] / r["bound"]) if np.isfinite(r["bound"]) and r["bound"] > 0 else "–",
                  r["rule"]] for _, r in bad.iterrows()]
-        lines += ["**Pairs that do not agree** (max|Δq| between the two paths over the whole run):", "",
+        lines += ["**Pairs that do not agree** (max|Δq| between the two paths over the compared horizon):", "",
                   md_table(["study", "case", "max|Δq| [rad]", "bound [rad]", "ratio", "rule"], rows,
                            [False, False, True, True, True, False]), "",
                   "Both paths take the same method at the same tolerances, but the compiled loop is not step-for-step "
@@ -47,6 +50,6 @@ def section(ctx: ReportContext) -> list[str]:
     if cpu is not None and len(cpu):
         r = cpu["compiled_over_reference"]
         lines += [f"CPU on this machine (`timing/backend_cpu_timing.csv`): the compiled run takes {fmt_number(r.min())} "
-                  f"… {fmt_number(r.max())} of the reference path's CPU (median {fmt_number(r.median())}) over the "
-                  f"{len(cpu)} pairs.", ""]
+                  f"… {fmt_number(r.max())} of the reference path's CPU per simulated second (median "
+                  f"{fmt_number(r.median())}) over the {len(cpu)} pairs.", ""]
     return lines

@@ -65,17 +65,19 @@ def _reference_path_series(ctx: ReportContext, table: pd.DataFrame, timing: pd.D
     """The sampled runs' reference-path (Python) CPU against their error: hollow markers, one series per method.
 
     The sweeps run compiled; every sampled case also ran on the reference path (case list's
-    ``reference_sample``), and ``backend_cpu_timing`` holds both CPU times under the case's name.
+    ``reference_sample``) over a shorter horizon, and ``backend_cpu_timing`` holds both CPU times under the
+    case's name, the reference path's scaled to the case's horizon.
     """
     cpu = ctx.table("backend_cpu_timing")
     if cpu is None or timing is None or "case" not in timing:
         return []
     named = _with_cpu(table[table["group"].isin(["adaptive", "rk4"])], timing, columns=("case",))  # the lines' runs
-    sampled = named.merge(cpu[cpu["study"] == STUDY][["case", "reference_cpu_s"]], on="case")
+    sampled = named.merge(cpu[cpu["study"] == STUDY][["case", "reference_cpu_scaled_s"]], on="case")
     out = []
     for method, runs in sampled.groupby("method", sort=False):
         style = {"color": _style(method, "RK45")["color"], "marker": "o", "ls": "none", "mfc": "none", "ms": 7, "mew": 1.3}
-        out.append((f"{method}, reference path (sampled runs)", runs["reference_cpu_s"], runs["max_abs_dq"], style))
+        out.append((f"{method}, reference path (sampled runs, CPU scaled from its twin's horizon)",
+                    runs["reference_cpu_scaled_s"], runs["max_abs_dq"], style))
     return out
 
 

@@ -1,0 +1,109 @@
+"""The package's import graph, read from its source: which ``study`` modules each module imports.
+
+Every ``.py`` file under ``study/`` is parsed with :mod:`ast`; every ``import study...`` and
+``from ... import ...`` anywhere in it (top level, inside functions, under ``if TYPE_CHECKING``) that
+names a ``study`` module is an edge. Relative imports are resolved against the importing module's
+package. ``from study.x import y`` is an edge to ``study.x.y`` when that is a module, else to
+``study.x``.
+
+One kind of edge is left out: a package's ``__init__`` importing from its own submodules (re-exporting
+them). Importing ``study.p.sub`` runs ``study/p/__init__.py`` first, so every submodule "imports" its
+package; with the re-export edge that would make every re-exporting package a cycle, although Python
+resolves it (the package finishes importing its submodules before anything uses it). An ``__init__``
+importing anything else (another package, a sibling's submodule) is an edge like any other.
+
+:func:`dependencies` is what a cache key covers: the modules reachable from some entry modules. A package
+reached that way brings all its submodules with it (``study.mechanisms`` imports the study's mechanisms by
+name with :mod:`importlib`, which no ``import`` statement shows), and a submodule its package's ``__init__``,
+which runs first. The top package's ``__init__`` (the public re-exports) is left out: it computes nothing.
+"""
+
+from __future__ import annotations
+
+import ast
+from functools import lru_cache
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+
+
+def module_names(package: Path | None = None) -> dict[str, Path]:
+    """Dotted module name -> file, for every .py file under ``package`` (default: study/; a package is its __init__)."""
+    package = PACKAGE if package is None else package
+    names = {}
+    for path in sorted(package.rglob("*.py")):
+        parts = list(path.relative_to(package.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        names[".".join(parts)] = path
+    return names
+
+
+def imported_modules(name: str, path: Path, modules: set[str]) -> set[str]:
+    """The study modules that module ``name`` (file ``path``) imports anywhere in its body."""
+    is_package = path.name == "__init__.py"
+    package = name if is_package else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                if node.level - 1 > len(base) - 1:
+                    raise ValueError(f"{path}: relative import beyond the top package (level {node.level})")
+                base = base[: len(base) - (node.level - 1)]
+                stem = ".".join(base + ([node.module] if node.module else []))
+            else:
+                stem = node.module
+            targets = [f"{stem}.{alias.name}" if f"{stem}.{alias.name}" in modules else stem
+                       for alias in node.names]
+        else:
+            continue
+        for target in targets:
+            # "import study.a.b" binds study.a.b; the nearest module that exists is the edge's end
+            while target and target not in modules:
+                target = target.rpartition(".")[0]
+            if not target or not target.startswith(PACKAGE.name):
+                continue
+            if is_package and target.startswith(name + "."):
+                continue  # a package re-exporting its own submodule (see the module docstring)
+            if target != name:
+                found.add(target)
+    return found
+
+
+def import_graph(package: Path | None = None) -> dict[str, set[str]]:
+    """Module -> the study modules it imports."""
+    files = module_names(package)
+    return {name: imported_modules(name, path, set(files)) for name, path in files.items()}
+
+
+@lru_cache(maxsize=None)
+def dependencies(*entries: str) -> tuple[Path, ...]:
+    """The files of the modules reachable from ``entries`` (the entries included), sorted.
+
+    Raises
+    ------
+    KeyError
+        An entry is not a module of the package (a stale name would silently drop code from a key).
+    """
+    files = module_names()
+    graph = import_graph()
+    unknown = [e for e in entries if e not in files]
+    if unknown:
+        raise KeyError(f"not modules of {PACKAGE.name}: {', '.join(unknown)}")
+    seen: set[str] = set()
+    todo = list(entries)
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        todo += graph[name]
+        parent = name.rpartition(".")[0]
+        if parent and parent != PACKAGE.name:   # importing a submodule runs its package's __init__ first
+            todo.append(parent)
+        if files[name].name == "__init__.py" and name != PACKAGE.name:
+            todo += [m for m in files if m.startswith(name + ".")]
+    return tuple(sorted(files[m] for m in seen))
