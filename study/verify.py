@@ -1,4 +1,4 @@
-"""Are the published tables reproducible? Two checks, one comparison rule (issue 13).
+"""Are the published tables reproducible? Two checks, one comparison rule.
 
 1. :func:`verify_tables` (``make verify``, ``python -m study verify``): regenerate every table
    (initial conditions, errata, every study's cases through the pipeline) into a scratch folder and

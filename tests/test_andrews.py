@@ -1,4 +1,4 @@
-"""Andrews' squeezing mechanism (issue 12, part 1) against the Test Set for IVP Solvers.
+"""Andrews' squeezing mechanism against the Test Set for IVP Solvers.
 
 Independent comparisons only: the equations generated from the joint-level description
 (study/mechanisms/andrews.py) against the Test Set's own equations typed by hand

@@ -37,7 +37,7 @@ def test_standalone_must_be_a_reason(tmp_path):
 
 
 def test_bench_list_holds_the_documented_plans():
-    """Against the benchmark's description (study/bench/sweeps.py, issue 7), typed here by hand."""
+    """Against the benchmark's description (study/bench/sweeps.py), typed here by hand."""
     assert CASES == {"quick_return": ("smooth_cutting", 5.0, {}),
                      "slider_crank": ("sustained_sliding", 20.0, {"friction": "regularized", "friction_eps": 1e-3}),
                      "four_bar": ("seed", 5.0, {}), "andrews": ("seed", 0.03, {})}

@@ -37,7 +37,7 @@ def test_simulate_bad_input(tmp_path, args, message):
     assert message in proc.stderr
 
 
-# --- friction, variant, backend, bench (issue 16) ----------------------------------------------
+# --- friction, variant, backend, bench ---------------------------------------------------------
 def _run(tmp_path, capsys, name, *args):
     out = tmp_path / name
     assert main(["simulate", "slider_crank", "--t-end", "0.5", *args, "--out", str(out)]) == 0
@@ -133,7 +133,7 @@ def test_bench_subcommand_runs_the_benchmark(monkeypatch, tmp_path):
     assert [(a.quick, a.skip_compile, a.out) for a in seen] == [(True, True, tmp_path), (True, False, tmp_path)]
 
 
-# --- describe (issue 16) ------------------------------------------------------------------------
+# --- describe ----------------------------------------------------------------------------------
 
 def test_describe_prints_the_four_bar_and_a_consistent_state(capsys):
     """Checked against the four-bar's hand geometry, not against the description code: three bodies

@@ -312,7 +312,7 @@ def test_main_writes_to_the_given_folder(tmp_path, capsys):
     assert (tmp_path / "errata.csv").exists() and "001.h" in capsys.readouterr().out
 
 
-# --- typeset forms (issue 16) ------------------------------------------------------------------
+# --- typeset forms ---------------------------------------------------------------------------
 def _marked(tex: str) -> list[str]:
     """The LaTeX groups marked as differing: {\\color{<DIFFERENCE_COLOR>}...} with balanced braces."""
     opening, found, start = "{\\color{" + errata.DIFFERENCE_COLOR + "}", [], 0

@@ -198,12 +198,13 @@ def test_block_reverses_when_it_cannot_stick():
 
 @pytest.mark.parametrize("reading", ["holds", "sliding_only"])
 def test_block_at_rest_between_static_limit_and_kinetic_resistance(reading):
-    """Issue 13: a push P = -4 N between mu_s m g = 3 N and R + mu_k m g = 5 N, block launched against it.
+    """A push P = -4 N between mu_s m g = 3 N and R + mu_k m g = 5 N, block launched against it.
 
     It stops at t* = v0 m / (R + mu m g - P) = 1/9 s (hand value). 'holds': the limit R + mu_s m g = 5 N
     holds it. 'sliding_only': the limit is 3 N < 4 N, so it cannot stick, and sliding back meets
     R + mu_k m g = 5 N > 4 N, which stops it at once: no consistent mode, a FrictionLawError at t*
-    (it used to restart forever at t*, as the slider-crank 'slip_then_stick' case did at 4.434 s)."""
+    (without it the integration would restart at t* forever; the slider-crank 'slip_then_stick' case
+    meets the same situation at 4.434 s)."""
     m, g, mu, R, P, v0 = 1.0, 10.0, 0.3, 2.0, -4.0, 1.0
     t_stop = v0 * m / (R + mu * m * g - P)
     eom = block(m, g, mu, mu, R, push=lambda t: P)
@@ -220,7 +221,7 @@ def test_block_at_rest_between_static_limit_and_kinetic_resistance(reading):
 
 
 def test_slider_crank_slip_then_stick_sliding_only_stops_with_a_clear_error():
-    """The case that used to run forever: the slider comes to rest at 4.434 s needing 9.06 N, above the
+    """A case with no consistent mode at rest: the slider comes to rest at 4.434 s needing 9.06 N, above the
     'sliding_only' static limit mu_s |N| = 4.0 N and below the kinetic force R + mu_k |N| = 9.5 N. Both
     readings slide identically until then, so the error comes at the instant the 'holds' run sticks."""
     options = dict(variant="slip_then_stick", t_end=6.0, method="projection", integrator="DOP853", rtol=1e-10,

@@ -1,4 +1,4 @@
-"""Issue 14: the pieces behind the catalogue, checked against independent values."""
+"""The pieces behind the reliability catalogue (test_reliability_catalogue.py), checked against independent values."""
 
 import io
 import os

@@ -1,4 +1,4 @@
-"""Issue 14's catalogue of bad inputs and faults: each gives one clear error, and nothing wrong is saved or reused.
+"""A catalogue of bad inputs and faults: each gives one clear error, and nothing wrong is saved or reused.
 
 Every entry is a setup (which may write files: a saved result, a case list) that returns the action to
 try. The runner snapshots the files under the test's folder, runs the action, and asserts
@@ -50,7 +50,7 @@ class Entry:
     exit: int | None = None    # command-line entries: the exit code
     writes: bool = False       # the action may write (then ``then`` checks what)
     then: Callable | None = None
-    verdict: str = "good"      # how the failure is handled after issue 14: good / weak (see reason)
+    verdict: str = "good"      # how well the failure is handled: good / weak (see reason)
     reason: str = ""
 
 
@@ -323,8 +323,8 @@ def rk4_step_far_too_large(tmp):
     return lambda: simulate("quick_return", integrator="RK4", step=0.1, t_end=0.3)
 
 
-# A step that starts on the far side of a switching surface now flips the mode there (issue 13,
-# study.solver.integrate._first_crossing) instead of stopping with "cannot be located": with h = 0.5 s
+# A step that starts on the far side of a switching surface flips the mode there
+# (study.solver.integrate._first_crossing) rather than stopping with "cannot be located": with h = 0.5 s
 # the run goes on and diverges, which the non-finite guard names with the step.
 @entry("non-finite", "step h = 0.5 s is likely too large", error=NonFiniteError)
 def rk4_step_over_a_switch(tmp):
@@ -692,7 +692,7 @@ def test_catalogue(e, isolated, capsys):
 
 
 def test_catalogue_size_and_verdicts():
-    """Issue 14 asks for at least 60 entries; the verdicts are what the closing note reports."""
+    """At least 60 distinct entries, each with a verdict of good or weak, and every weak one with its reason."""
     assert len(CATALOGUE) >= 60, len(CATALOGUE)
     assert len({e.name for e in CATALOGUE}) == len(CATALOGUE)
     assert {e.verdict for e in CATALOGUE} <= {"good", "weak"}  # no entry is silently wrong, stale or hanging

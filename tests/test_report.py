@@ -200,7 +200,7 @@ def test_claims_verdicts_follow_the_tables(tmp_path, saved):
 
 def test_case_lists_name_their_report_sections(tmp_path):
     """The report's sections come from the case lists ([study] section, section_order) and FIXED_SECTIONS;
-    the study's own case lists give the order the report had when it kept a list of studies."""
+    the study's own case lists give the order below."""
     from study.report import report_sections
 
     assert report_sections(pl.load_case_lists()) == (

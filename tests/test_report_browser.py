@@ -1,4 +1,4 @@
-"""The report as a reader sees it: reports/report.html opened in headless Chromium (issue 16).
+"""The report as a reader sees it: reports/report.html opened in headless Chromium.
 
 Checks that every image loads, that no raw Markdown (links, emphasis, code spans, images, $math$)
 is left in the rendered text, that every MathML formula has a non-zero size and that nothing but

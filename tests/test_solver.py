@@ -218,9 +218,9 @@ def test_sliding_mode_with_equal_gains_is_baumgarte_plus_switching_term():
 
 
 def test_lsoda_small_starting_steps_are_not_a_stall():
-    """LSODA starts with a ~1e-12 s step (measured: 9.6e-13 s on the quick-return); with the default
-    min_step of a 20 s run (2e-11 s) a single such step once stopped the sliding_mode study's LSODA
-    cases at t = 1e-12 s. Only min_step_run steps in a row count as a stall."""
+    """LSODA starts with a ~1e-12 s step (measured: 9.6e-13 s on the quick-return), below the default
+    min_step of a 20 s run (2e-11 s); counting a single such step as a stall would stop the sliding_mode
+    study's LSODA cases at t = 1e-12 s. Only min_step_run steps in a row count as a stall."""
     from study import simulate
 
     r = simulate("quick_return", t_end=0.05, integrator="LSODA", rtol=1e-8, atol=1e-10, min_step=2e-11)
@@ -232,8 +232,8 @@ def test_lsoda_small_starting_steps_are_not_a_stall():
     ("projection", "RK45", 1e-4, 0.5),      # the projection moves x_D back across x_max after the cut switched on
 ])
 def test_switches_located_at_loose_tolerances(method, integrator, rtol, t_end):
-    """Issue 13: at rtol 1e-4 / 1e-5 a step could start on the far side of a switching surface (round-off
-    after a located switch, or a post-step projection) and Brent's method had no bracket. Without
+    """At rtol 1e-4 / 1e-5 a step can start on the far side of a switching surface (round-off after a
+    located switch, or a post-step projection), where Brent's method alone has no bracket. Without
     projection every sample's mode must equal the signs of the switching functions evaluated on that
     sample's state (with projection the sample is projected after the mode is read, which may move it
     across a surface by the projection's correction); every switch of an accurate run (DOP853 at the

@@ -1,4 +1,4 @@
-"""study.verify: the table comparison of `make verify` and of the perturbation check (issue 13)."""
+"""study.verify: the table comparison of `make verify` and of the perturbation check."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The benchmark (issue 7, ``python -m study bench``, ``make bench``): accuracy per CPU second of the
+"""The benchmark (``python -m study bench``, ``make bench``): accuracy per CPU second of the
 in-house solver, side by side with Exudyn, written to ``reports/benchmarks/*.csv``.
 
 In one process on one machine it measures
@@ -19,7 +19,7 @@ In one process on one machine it measures
 plus the one-off compile time (:mod:`.compile_time`). Every simulation run is a case of the
 benchmark's own case list ``reference/cases/bench.toml`` (standalone: the pipeline's run, reproduce
 and verify leave it out), run through the pipeline's store; :mod:`.summary` makes the work-precision
-tables from the saved runs. Every issue-7 target is judged from these
+tables from the saved runs. Every benchmark target is judged from these
 tables by :func:`study.bench.targets.evaluate_targets` into ``targets.csv``. The timing harness
 (medians of repeats, the error measure) is :mod:`.harness`, every planning number :mod:`.settings`,
 the command :mod:`.command`, the benchmark's own figure :mod:`.figure`.

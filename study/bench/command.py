@@ -37,7 +37,7 @@ from study.integrity import atomic_write
 from study.simulate import simulate
 
 
-DESCRIPTION = "Benchmark (issue 7): accuracy per CPU second of the in-house solver, side by side with Exudyn."
+DESCRIPTION = "Benchmark: accuracy per CPU second of the in-house solver, side by side with Exudyn."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:

@@ -1,4 +1,4 @@
-"""The quick-return over 20 s to max |dq| <= 1e-8 (benchmark part f; issue 7, target 2).
+"""The quick-return over 20 s to max |dq| <= 1e-8 (benchmark part f; target 2).
 
 For the smooth cutting law and for the seed's on/off law (switches located by the compiled loop):
 DOP853 over rtol, each against a reference whose own error is estimated by a further run, with the

@@ -49,7 +49,7 @@ MARGIN = 0.8  # aim the order-2 prediction at MARGIN * level
 #: Exudyn's two configurations (study.exudyn_models.settings.CONFIGURATIONS), as work-precision engines:
 #: 'tuned' is Exudyn as its documentation recommends for speed (symbolic user functions, plain constant
 #: loads, no numerical load Jacobian unless a Python load needs it, one Jacobian per step); 'python'
-#: evaluates every load law in a Python user function with full Newton (the study's earlier setting).
+#: evaluates every load law in a Python user function with full Newton (study.exudyn_models.run's default).
 EXUDYN_ENGINES = {"Exudyn tuned": "tuned", "Exudyn (Python user functions)": "python"}
 EXUDYN_REPEATS = 3  # every Exudyn run that enters a ratio is timed at least this often (median)
 #: Mechanism -> (variant, horizon [s], friction options) of the work-precision sweeps: their reference runs.
@@ -78,7 +78,7 @@ def repeats(quick: bool) -> int:
     return QUICK_REPEATS if quick else REPEATS
 
 
-#: The two ratios the benchmark reports (issue 15): like with like, the compiled in-house path against
+#: The two ratios the benchmark reports, each like with like: the compiled in-house path against
 #: tuned Exudyn, and the Python-bound in-house reference path against Exudyn with Python user functions.
 COMPARISONS = {"compiled / Exudyn tuned": ("in-house compiled", "Exudyn tuned"),
                "reference / Exudyn (Python user functions)": ("in-house reference", "Exudyn (Python user functions)")}

@@ -1,4 +1,4 @@
-"""Issue 7's targets, judged from the benchmark's tables into ``targets.csv`` (a pure function of them)."""
+"""The benchmark's targets, judged from its tables into ``targets.csv`` (a pure function of them)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pandas as pd
 from study.bench.settings import COMPARISONS, REF_RTOL, REPEATS, T2_LEVEL, RATIO_LEVEL
 from study.reference_data import tolerance
 
-# Issue 7's targets: key -> (threshold, unit, text); 1-3 are the issue's numbers, 4a and 4b the
+# The benchmark's targets: key -> (threshold, unit, text); 1-3 are the specified numbers, 4a and 4b the
 # study's reading of "linear" and "bounded"; all with their provenance in reference/tolerances.toml.
 THRESHOLDS = {"accel": (tolerance("bench_target_acceleration_us"), "µs", "1: one acceleration evaluation of the quick-return"),
               "qr20": (tolerance("bench_target_quick_return_20s_cpu"), "s", "2: quick-return, 20 s, max|Δq| ≤ 1e-8: CPU"),
@@ -34,7 +34,7 @@ def _fit_exponent(t: np.ndarray, cpu: np.ndarray) -> float:
 def evaluate_targets(accel: pd.DataFrame, ratio: pd.DataFrame, qr20: pd.DataFrame, scaling_time: pd.DataFrame,
                      memory: pd.DataFrame, thresholds: dict = THRESHOLDS, wp: pd.DataFrame | None = None,
                      study_cpu: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Issue 7's targets from the benchmark's tables (a pure function of the saved frames).
+    """The benchmark's targets from its tables (a pure function of the saved frames).
 
     Parameters
     ----------

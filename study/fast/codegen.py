@@ -140,7 +140,7 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
         return sys.modules[name]
     folder = generated_dir()
     path = folder / f"{name}.py"
-    ensure_generated(path, lambda: generate_source(b))  # checksum-verified (issue 14)
+    ensure_generated(path, lambda: generate_source(b))  # checksum-verified; regenerated if it fails
     spec = importlib.util.spec_from_file_location(name, Path(path))
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # numba's cache pickles the module name and imports it on reload

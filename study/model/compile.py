@@ -142,7 +142,7 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
     key = description_key(b)
     folder = cache_dir() / "codegen"
     path = folder / f"{b.name}_{key}.py"
-    ensure_generated(path, lambda: generate_source(b, derive(b)))  # checksum-verified (issue 14)
+    ensure_generated(path, lambda: generate_source(b, derive(b)))  # checksum-verified; regenerated if it fails
     return _load_module(path, key)
 
 

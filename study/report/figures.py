@@ -369,7 +369,7 @@ def grid_heatmaps_figure(panels: Sequence[Mapping], title: str, colorbar_label: 
     return fig
 
 
-# --- benchmark (issue 7): work-precision of the in-house solver and Exudyn --------------------------
+# --- benchmark: work-precision of the in-house solver and Exudyn ---------------------------------
 _BENCH_STYLES = {("in-house compiled", "DOP853"): {"color": "tab:blue", "marker": "o", "ls": "-"},
                  ("in-house compiled", "RK45"): {"color": "tab:green", "marker": "o", "ls": "-"},
                  ("in-house compiled", "RK4"): {"color": "tab:olive", "marker": "^", "ls": "-"},

@@ -1,4 +1,4 @@
-"""Andrews' squeezing mechanism against the Test Set's published reference solution (issue 12, part 1).
+"""Andrews' squeezing mechanism against the Test Set's published reference solution.
 
 The case list ``reference/cases/andrews.toml`` runs the in-house reference (DOP853, rtol 1e-13),
 every stabilization method with adaptive RK45 / DOP853 / Radau over rtol and fixed-step RK4 over h,

@@ -76,7 +76,7 @@ def test_quick_return_through_the_first_cut_order_2(solver):
 
 @pytest.mark.parametrize("solver", ["index3", "index2"])
 def test_four_bar_converges_to_inhouse_reference_at_order_2(solver):
-    """The four-bar, added through its description only: Exudyn's model generated from the same
+    """The four-bar, defined by its description only: Exudyn's model generated from the same
     description converges to the in-house reference at order 2 in q and qd (and the cut joint's
     multipliers: at order 2 with index 2, faster than first order with index 3)."""
     h = tol("four_bar_order_steps")

@@ -1,6 +1,6 @@
 """Report section: Andrews' squeezing mechanism against the Test Set's published solution (study ``andrews``).
 
-A subsection of "Benchmarks beyond the papers" (issue 12, part 1). Reads the tables
+A subsection of "Benchmarks beyond the papers". Reads the tables
 ``andrews_reference``, ``andrews_work_precision``, ``andrews_work_precision_timing`` and
 ``andrews_orders`` (written by :func:`study.studies.andrews.summarize`); never a run. Every number in
 the text is read from those tables or from ``reference/andrews_published.toml``.

@@ -1,4 +1,4 @@
-"""Report section: performance of the in-house solver, side by side with Exudyn (issue 7).
+"""Report section: performance of the in-house solver, side by side with Exudyn.
 
 Reads the benchmark's saved files in ``reports/benchmarks/`` (written by ``make bench``, i.e.
 ``python -m study.bench``): ``targets.csv``, ``ratio_inhouse_exudyn.csv``, ``cpu_to_accuracy.csv``,
@@ -164,7 +164,7 @@ def section(ctx: ReportContext) -> list[str]:
         return lines + [f"No benchmark results in `{folder.name}/` (`reports/{FOLDER}/targets.csv` is missing): run "
                         "`make bench` (`python -m study.bench`, about 10 minutes on 2 cores) to measure them.", ""]
     info = _machine(ctx)
-    lines += ["Issue 7's benchmark (`study/bench/`, `make bench`) measures, in one process on one machine, the "
+    lines += ["The benchmark (`study/bench/`, `make bench`) measures, in one process on one machine, the "
               "in-house solver's compiled path (generated numba code, compiled integration loop), its reference "
               "path (Python + scipy) and Exudyn's index-3 and index-2 fixed-step solvers in two configurations: "
               "*tuned* (as Exudyn's documentation recommends for speed: state-dependent load laws as symbolic user "

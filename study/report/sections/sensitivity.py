@@ -225,7 +225,7 @@ def section(ctx: ReportContext) -> list[str]:
               "RK4, h = 1e-3 s), against a DOP853 rtol 1e-12 projection reference. 001 gives no gains. "
               "The study runs 001's on/off cutting law with its switches located, not the smooth law: every step "
               "then lies inside one smooth piece, so the errors are fixed by the settings and not by where an "
-              "adaptive step happens to land on a 5 mm tanh ramp (issue 13; `tables/perturbation_check.csv` gives "
+              "adaptive step happens to land on a 5 mm tanh ramp (`tables/perturbation_check.csv` gives "
               "how far each column moves when q(0), qd(0) move by a few ulps). "
               "Colours are on a log scale; each cell is annotated with the table's value.", ""]
     ok = table[table["status"] == "ok"] if "status" in table else table

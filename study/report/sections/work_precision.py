@@ -237,7 +237,7 @@ def section(ctx: ReportContext) -> list[str]:
               f"{MECH} with every in-house stabilization method, adaptive RK45 and DOP853 over rtol 1e-6 … 1e-11 "
               "(atol = rtol/100) and fixed-step RK4 over h, each compared with a DOP853 rtol 1e-13 projection "
               "reference on the common 0.01 s samples (error = max over samples and coordinates of |q − q_ref|). "
-              "**Why the on/off law (issue 13):** the smooth law's tanh ramps (5 mm in x_D, 1 cm/s in v_D) are "
+              "**Why the on/off law:** the smooth law's tanh ramps (5 mm in x_D, 1 cm/s in v_D) are "
               "crossed in ~0.2 ms, far below an adaptive step, so whether a step lands on a ramp depends on last-bit "
               "differences: moving q(0), qd(0) by 4 ulps moved max|Δq| by 60–97 % (DOP853 rtol 1e-11, RK45 rtol 1e-6) "
               "and the rtol 1e-13 reference by 1.6e-8 rad, which is why these errors differed between machines. With "
