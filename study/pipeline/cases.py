@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import math
 import json
 import tomllib
 from dataclasses import dataclass, field
@@ -273,12 +274,17 @@ def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case
 def sample_horizon(case: Case) -> float:
     """The horizon of a sampled case's reference-path twin: the case's own, cut to ``backend_sample_horizon``
     (an adaptive run) or to 300 steps (a fixed-step run), the horizons the agreement bounds' reasons assume
-    (reference/tolerances.toml)."""
+    (reference/tolerances.toml), and then down to a whole number of output steps, so that every sample of the
+    twin is a sample of the case."""
     from study.reference_data import tolerance
+    from study.simulate import DEFAULT_OUTPUT_STEP
 
     step = case.kwargs.get("step")
     limit = tolerance("backend_sample_horizon") if step is None else FIXED_STEP_SAMPLE_STEPS * float(step)
-    return min(float(case.t_end), limit)
+    if limit >= case.t_end:
+        return float(case.t_end)
+    output_step = float(case.kwargs.get("output_step", DEFAULT_OUTPUT_STEP))
+    return round(max(1, math.floor(limit / output_step + 1e-9)) * output_step, 12)
 
 
 FIXED_STEP_SAMPLE_STEPS = 300   # fast_fixed_step_agreement's reason (reference/tolerances.toml)
