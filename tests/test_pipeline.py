@@ -339,8 +339,9 @@ def test_case_key_covers_every_module_a_run_imports(engine):
     assert not {p for p in covered if p.startswith(("report/", "studies/", "cli.py"))}
 
 
-def test_editing_an_imported_module_changes_the_key(tmp_path, monkeypatch):
-    """The key follows the import graph: a planted package whose entry imports a helper inside a function."""
+def test_dependencies_follow_function_imports_and_parent_packages(tmp_path, monkeypatch):
+    """A planted package: its entry imports a helper inside a function; the helper brings its package's __init__,
+    and a module nothing imports is left out."""
     from study import imports
 
     pkg = tmp_path / "study"

@@ -46,8 +46,8 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import math
 import json
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -273,21 +273,18 @@ def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case
 
 def sample_horizon(case: Case) -> float:
     """The horizon of a sampled case's reference-path twin: the case's own, cut to ``backend_sample_horizon``
-    (an adaptive run) or to 300 steps (a fixed-step run), the horizons the agreement bounds' reasons assume
-    (reference/tolerances.toml), and then down to a whole number of output steps, so that every sample of the
+    (an adaptive run) or to ``backend_sample_steps`` steps (a fixed-step run), the horizons the agreement bounds'
+    reasons assume (reference/tolerances.toml), and then down to a whole number of output steps, so that every sample of the
     twin is a sample of the case."""
     from study.reference_data import tolerance
     from study.simulate import DEFAULT_OUTPUT_STEP
 
     step = case.kwargs.get("step")
-    limit = tolerance("backend_sample_horizon") if step is None else FIXED_STEP_SAMPLE_STEPS * float(step)
+    limit = tolerance("backend_sample_horizon") if step is None else tolerance("backend_sample_steps") * float(step)
     if limit >= case.t_end:
         return float(case.t_end)
     output_step = float(case.kwargs.get("output_step", DEFAULT_OUTPUT_STEP))
     return round(max(1, math.floor(limit / output_step + 1e-9)) * output_step, 12)
-
-
-FIXED_STEP_SAMPLE_STEPS = 300   # fast_fixed_step_agreement's reason (reference/tolerances.toml)
 
 
 def load_case_list(path: Path) -> CaseList:

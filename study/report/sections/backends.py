@@ -28,7 +28,7 @@ def section(ctx: ReportContext) -> list[str]:
               f"generated from the same equations); every n-th of their cases also ran on the reference path. "
               f"**{int(ok.sum())} of {len(agree)} sampled pairs agree** within their bound ({per_study}), compared "
               "on the reference-path run's horizon: the case's own, cut to `backend_sample_horizon` (an adaptive "
-              "run) or to 300 steps (a fixed-step run), the horizons the bounds' reasons assume "
+              "run) or to `backend_sample_steps` steps (a fixed-step run), the horizons the bounds' reasons assume "
               "(`reference/tolerances.toml`). The bound of an adaptive pair is 2 × `adaptive_global_error_factor` × "
               "rtol × max|q|: each run is expected to stay within the global error of its tolerance of the exact "
               "solution; a fixed-step pair takes the same steps, so only round-off may differ "
