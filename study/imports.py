@@ -14,8 +14,9 @@ importing anything else (another package, a sibling's submodule) is an edge like
 
 :func:`dependencies` is what a cache key covers: the modules reachable from some entry modules. A package
 reached that way brings all its submodules with it (``study.mechanisms`` imports the study's mechanisms by
-name with :mod:`importlib`, which no ``import`` statement shows), and a submodule its package's ``__init__``,
-which runs first. The top package's ``__init__`` (the public re-exports) is left out: it computes nothing.
+name with :mod:`importlib`, which no ``import`` statement shows). A module's enclosing packages add their
+``__init__`` files, which run first, but not what those re-export; the top package's ``__init__`` (the public
+re-exports) is left out: it computes nothing.
 """
 
 from __future__ import annotations
@@ -101,9 +102,7 @@ def dependencies(*entries: str) -> tuple[Path, ...]:
             continue
         seen.add(name)
         todo += graph[name]
-        parent = name.rpartition(".")[0]
-        if parent and parent != PACKAGE.name:   # importing a submodule runs its package's __init__ first
-            todo.append(parent)
         if files[name].name == "__init__.py" and name != PACKAGE.name:
             todo += [m for m in files if m.startswith(name + ".")]
-    return tuple(sorted(files[m] for m in seen))
+    parents = {m.rsplit(".", i)[0] for m in seen for i in range(1, m.count("."))}
+    return tuple(sorted(files[m] for m in seen | parents))
