@@ -116,40 +116,46 @@ def _is_number(x) -> bool:
     return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
 
 
-def _cell_difference(a, b, rule: Rule) -> tuple[float, float, bool]:
-    """(|a - b|, |a - b| / |a|, within the rule) for one cell; NaN equals NaN."""
+def _cell_difference(a, b, rule: Rule) -> tuple[float, float, float]:
+    """(|a - b|, |a - b| / |a|, margin) for one cell: margin is how many times the difference fits into what the rule
+    allows (inf for equal cells, 0 for a difference no tolerance covers: a NaN against a number, a changed string);
+    the cell is within its rule if the margin is >= 1. NaN equals NaN."""
     if _is_number(a) and _is_number(b):
         fa, fb = float(a), float(b)
         if math.isnan(fa) or math.isnan(fb):
             same = math.isnan(fa) and math.isnan(fb)
-            return (0.0, 0.0, True) if same else (math.inf, math.inf, False)
+            return (0.0, 0.0, math.inf) if same else (math.inf, math.inf, 0.0)
         if math.isinf(fa) or math.isinf(fb):
-            return (0.0, 0.0, True) if fa == fb else (math.inf, math.inf, False)
+            return (0.0, 0.0, math.inf) if fa == fb else (math.inf, math.inf, 0.0)
         d = abs(fa - fb)
-        within = d <= rule.atol + rule.rtol * abs(fa)
-        if not within and rule.decades > 0 and fa * fb > 0:
-            within = abs(math.log10(fb / fa)) <= rule.decades
-        return d, d / abs(fa) if fa else (0.0 if d == 0 else math.inf), within
+        rel = d / abs(fa) if fa else (0.0 if d == 0 else math.inf)
+        if d == 0:
+            return 0.0, 0.0, math.inf
+        margin = (rule.atol + rule.rtol * abs(fa)) / d
+        if rule.decades > 0 and fa * fb > 0:
+            margin = max(margin, rule.decades / abs(math.log10(fb / fa)) if fa != fb else math.inf)
+        return d, rel, margin
     if isinstance(a, str) and isinstance(b, str):
         if a == b:
-            return 0.0, 0.0, True
+            return 0.0, 0.0, math.inf
         na, nb = _numbers(a), _numbers(b)
         if na is None or nb is None or len(na) != len(nb) or a.count("...") != b.count("..."):
-            return math.inf, math.inf, False
-        worst = (0.0, 0.0, True)
+            return math.inf, math.inf, 0.0
+        worst = (0.0, 0.0, math.inf)
         for x, y in zip(na, nb):
             d = _cell_difference(x, y, rule)
-            worst = (max(worst[0], d[0]), max(worst[1], d[1]), worst[2] and d[2])
+            worst = (max(worst[0], d[0]), max(worst[1], d[1]), min(worst[2], d[2]))
         return worst
     if type(a) is type(b) and a == b:  # booleans (verdicts) and other identical values
-        return 0.0, 0.0, True
+        return 0.0, 0.0, math.inf
     same = not isinstance(a, str) and not isinstance(b, str) and bool(pd.isna(a)) and bool(pd.isna(b))
-    return (0.0, 0.0, True) if same else (math.inf, math.inf, False)
+    return (0.0, 0.0, math.inf) if same else (math.inf, math.inf, 0.0)
 
 
 def compare_tables(table: str, old: pd.DataFrame, new: pd.DataFrame, rules_path: Path = RULES_PATH) -> pd.DataFrame:
-    """One row per column of ``old``: the worst absolute and relative difference to ``new``, the row
-    where it occurs, the rule applied and whether every cell is within it.
+    """One row per column of ``old`` and rule class applied in it (a [[rows]] entry gives some of a column's cells
+    another class): the worst absolute and relative difference to ``new``, the row where it occurs, the smallest
+    margin (allowed / found, see :func:`_cell_difference`) and whether every cell is within its rule.
 
     Tables must have the same columns and rows (same order); a missing column or a different row
     count is a failed row with ``column`` '<shape>'.
@@ -157,25 +163,31 @@ def compare_tables(table: str, old: pd.DataFrame, new: pd.DataFrame, rules_path:
     rows = []
     if list(old.columns) != list(new.columns) or len(old) != len(new):
         rows.append({"table": table, "column": "<shape>", "rule": "identical", "rtol": 0.0, "atol": 0.0,
-                     "worst_abs_diff": math.inf, "worst_rel_diff": math.inf, "worst_row": -1, "compared": True,
-                     "passed": False,
+                     "decades": 0.0, "worst_abs_diff": math.inf, "worst_rel_diff": math.inf, "margin": 0.0,
+                     "worst_row": -1, "compared": True, "passed": False,
                      "note": f"columns {list(old.columns)} rows {len(old)} vs columns {list(new.columns)} rows {len(new)}"})
         return pd.DataFrame(rows)
     records = old.to_dict("records")
     for col in old.columns:
-        rule = rule_for(table, col, rules_path)
-        worst_abs, worst_rel, worst_row, ok = 0.0, 0.0, -1, True
+        per_rule: dict[str, dict] = {}
         for i, (a, b) in enumerate(zip(old[col].tolist(), new[col].tolist())):
-            cell_rule = rule_for(table, col, rules_path, records[i])
-            if not cell_rule.compare:
+            rule = rule_for(table, col, rules_path, records[i])
+            entry = per_rule.setdefault(rule.name, {"rule": rule, "abs": 0.0, "rel": 0.0, "margin": math.inf, "row": -1})
+            if not rule.compare:
                 continue
-            d_abs, d_rel, within = _cell_difference(a, b, cell_rule)
-            ok &= within
-            if (d_abs, d_rel) > (worst_abs, worst_rel) or (not within and worst_row < 0):
-                worst_abs, worst_rel, worst_row = d_abs, d_rel, i
-        rows.append({"table": table, "column": col, "rule": rule.name, "rtol": rule.rtol, "atol": rule.atol,
-                     "worst_abs_diff": worst_abs, "worst_rel_diff": worst_rel, "worst_row": worst_row,
-                     "compared": rule.compare, "passed": bool(ok or not rule.compare), "note": ""})
+            d_abs, d_rel, margin = _cell_difference(a, b, rule)
+            if (d_abs, d_rel) > (entry["abs"], entry["rel"]) or (margin < 1 and entry["row"] < 0):
+                entry.update(abs=d_abs, rel=d_rel, row=i)
+            entry["margin"] = min(entry["margin"], margin)
+        if not per_rule:   # an empty table: the column's own rule, nothing compared
+            rule = rule_for(table, col, rules_path)
+            per_rule[rule.name] = {"rule": rule, "abs": 0.0, "rel": 0.0, "margin": math.inf, "row": -1}
+        for name, e in per_rule.items():
+            rule = e["rule"]
+            rows.append({"table": table, "column": col, "rule": name, "rtol": rule.rtol, "atol": rule.atol,
+                         "decades": rule.decades, "worst_abs_diff": e["abs"], "worst_rel_diff": e["rel"],
+                         "margin": e["margin"], "worst_row": e["row"], "compared": rule.compare,
+                         "passed": bool(e["margin"] >= 1 or not rule.compare), "note": ""})
     return pd.DataFrame(rows)
 
 
@@ -213,6 +225,7 @@ def worst_per_table(comparison: pd.DataFrame) -> pd.DataFrame:
         failed = part.loc[~part["passed"], "column"].tolist()
         rows.append({"table": table, "worst_column": part.loc[i, "column"],
                      "worst_abs_diff": part.loc[i, "worst_abs_diff"], "worst_rel_diff": part.loc[i, "worst_rel_diff"],
+                     "smallest_margin": judged["margin"].min() if len(judged) else math.inf,
                      "passed": not failed, "failed_columns": ";".join(failed)})
     return pd.DataFrame(rows)
 
@@ -255,8 +268,8 @@ def _print(worst: pd.DataFrame, comparison: pd.DataFrame, title: str, stream) ->
     failed = comparison[~comparison["passed"]]
     if len(failed):
         print("FAILED columns:", file=stream)
-        print(failed[["table", "column", "rule", "rtol", "atol", "worst_abs_diff", "worst_rel_diff",
-                      "worst_row", "note"]].to_string(index=False), file=stream)
+        print(failed[["table", "column", "rule", "rtol", "atol", "decades", "worst_abs_diff", "worst_rel_diff",
+                      "margin", "worst_row", "note"]].to_string(index=False), file=stream)
 
 
 # --- the perturbation check ----------------------------------------------------------------------

@@ -89,3 +89,21 @@ def test_perturbed_case_has_its_own_key():
     case = load_case_lists(studies=["work_precision"])[0].cases[0]
     twin = perturbed(case, 4)
     assert twin.kwargs["perturb_ulps"] == 4 and twin.key() != case.key() and twin.name == case.name
+
+
+def test_margin_and_one_row_per_rule_class():
+    """The margin is what the rule allows over what was found; a column whose rows fall under two classes
+    ([[rows]] overrides) is reported once per class, so each class's worst difference is its own."""
+    rule = rule_for("andrews_reference", "quantity_value")
+    base = 1.0
+    moved = base * (1 + rule.rtol / 4)   # a quarter of the relative tolerance: margin about 4
+    result = compare_tables("andrews_reference", _table(quantity_value=[base]), _table(quantity_value=[moved]))
+    assert result["margin"].iloc[0] == pytest.approx((rule.atol + rule.rtol * base) / (moved - base))
+    old = _table(method=["sliding_mode", "baumgarte"], max_abs_dq_vs_reference=[1e-6, 1e-6])
+    new = _table(method=["sliding_mode", "baumgarte"], max_abs_dq_vs_reference=[3e-6, 1.1e-6])
+    rows = compare_tables("sensitivity", old, new).set_index(["column", "rule"])
+    by_rule = rows.loc["max_abs_dq_vs_reference"]
+    assert set(by_rule.index) == {rule_for("sensitivity", "max_abs_dq_vs_reference", row={"method": m}).name
+                                  for m in ("sliding_mode", "baumgarte")}
+    assert by_rule.loc["magnitude_error", "worst_abs_diff"] == pytest.approx(2e-6)
+    assert by_rule.loc["run_error", "worst_abs_diff"] == pytest.approx(1e-7)
