@@ -37,23 +37,25 @@ def test_numbers_within_and_beyond_their_rule():
 
 
 def test_decade_rule_judges_the_order_of_magnitude():
-    """A magnitude class passes a factor below 10**decades either way, fails above it and on a sign change."""
-    rule = rule_for("work_precision", "max_abs_dq")
+    """A class with decades passes a factor below 10**decades either way, fails above it and on a sign change."""
+    rule = rule_for("sensitivity", "max_abs_dq")
+    assert rule.decades > 0
     factor = 10 ** rule.decades
     base = 1e-6  # far above the class's atol, so only the decade test can pass a large move
     for new, passes in [(base * 0.9 * factor, True), (base / (0.9 * factor), True), (base * 1.1 * factor, False),
                         (base / (1.1 * factor), False), (-base, False)]:
-        result = compare_tables("work_precision", _table(max_abs_dq=[base]), _table(max_abs_dq=[new]))
+        result = compare_tables("sensitivity", _table(max_abs_dq=[base]), _table(max_abs_dq=[new]))
         assert bool(result["passed"].all()) is passes, (new, passes)
 
 
 def test_row_rules_select_cells_by_equal_cells():
     """[[rows]] entries override a column's rule in the rows they select, and only there."""
-    old = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-8, 1e-8])
-    lsoda_moved = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-6, 1e-8])
-    rk45_moved = _table(integrator_setting=["LSODA rtol=1e-8", "RK45 rtol=1e-6"], abs_phi_end=[1e-8, 1e-6])
-    assert compare_tables("sliding_mode_runs", old, lsoda_moved)["passed"].all()  # LSODA cells: not compared
-    assert not compare_tables("sliding_mode_runs", old, rk45_moved)["passed"].all()
+    keys = dict(h_coarse=[1e-5, 2e-5], h_fine=[5e-6, 1e-5])   # the first row is at the reference's floor
+    old = _table(**keys, order_published=[4.0, 4.0])
+    floor_moved = _table(**keys, order_published=[4.5, 4.0])
+    asymptotic_moved = _table(**keys, order_published=[4.0, 4.5])
+    assert compare_tables("andrews_orders", old, floor_moved)["passed"].all()  # order_at_floor: not compared
+    assert not compare_tables("andrews_orders", old, asymptotic_moved)["passed"].all()
 
 
 def test_verdicts_must_be_identical():
@@ -99,11 +101,11 @@ def test_margin_and_one_row_per_rule_class():
     moved = base * (1 + rule.rtol / 4)   # a quarter of the relative tolerance: margin about 4
     result = compare_tables("andrews_reference", _table(quantity_value=[base]), _table(quantity_value=[moved]))
     assert result["margin"].iloc[0] == pytest.approx((rule.atol + rule.rtol * base) / (moved - base))
-    old = _table(method=["sliding_mode", "baumgarte"], max_abs_dq_vs_reference=[1e-6, 1e-6])
-    new = _table(method=["sliding_mode", "baumgarte"], max_abs_dq_vs_reference=[3e-6, 1.1e-6])
-    rows = compare_tables("sensitivity", old, new).set_index(["column", "rule"])
-    by_rule = rows.loc["max_abs_dq_vs_reference"]
-    assert set(by_rule.index) == {rule_for("sensitivity", "max_abs_dq_vs_reference", row={"method": m}).name
-                                  for m in ("sliding_mode", "baumgarte")}
-    assert by_rule.loc["magnitude_error", "worst_abs_diff"] == pytest.approx(2e-6)
-    assert by_rule.loc["run_error", "worst_abs_diff"] == pytest.approx(1e-7)
+    rows = dict(case=["sustained_sliding_regularized", "sustained_sliding_exact"], treatment=["regularized", "exact"])
+    old = _table(**rows, nfev=[1000, 1000])
+    new = _table(**rows, nfev=[1200, 1010])
+    result = compare_tables("slider_crank_summary", old, new).set_index(["column", "rule"]).loc["nfev"]
+    assert set(result.index) == {rule_for("slider_crank_summary", "nfev", row={"case": c, "treatment": t}).name
+                                 for c, t in zip(rows["case"], rows["treatment"])}
+    assert result.loc["magnitude_work", "worst_abs_diff"] == 200
+    assert result.loc["work", "worst_abs_diff"] == 10
