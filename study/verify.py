@@ -154,8 +154,8 @@ def _cell_difference(a, b, rule: Rule) -> tuple[float, float, float]:
 
 def compare_tables(table: str, old: pd.DataFrame, new: pd.DataFrame, rules_path: Path = RULES_PATH) -> pd.DataFrame:
     """One row per column of ``old`` and rule class applied in it (a [[rows]] entry gives some of a column's cells
-    another class): the worst absolute and relative difference to ``new``, the row where it occurs, the smallest
-    margin (allowed / found, see :func:`_cell_difference`) and whether every cell is within its rule.
+    another class): the cell with the smallest margin (allowed / found, see :func:`_cell_difference`), its absolute
+    and relative difference to ``new`` and its row, and whether every cell is within its rule.
 
     Tables must have the same columns and rows (same order); a missing column or a different row
     count is a failed row with ``column`` '<shape>'.
@@ -176,9 +176,8 @@ def compare_tables(table: str, old: pd.DataFrame, new: pd.DataFrame, rules_path:
             if not rule.compare:
                 continue
             d_abs, d_rel, margin = _cell_difference(a, b, rule)
-            if (d_abs, d_rel) > (entry["abs"], entry["rel"]) or (margin < 1 and entry["row"] < 0):
-                entry.update(abs=d_abs, rel=d_rel, row=i)
-            entry["margin"] = min(entry["margin"], margin)
+            if margin < entry["margin"] or (entry["row"] < 0 and (d_abs, d_rel) > (entry["abs"], entry["rel"])):
+                entry.update(abs=d_abs, rel=d_rel, row=i, margin=min(margin, entry["margin"]))
         if not per_rule:   # an empty table: the column's own rule, nothing compared
             rule = rule_for(table, col, rules_path)
             per_rule[rule.name] = {"rule": rule, "abs": 0.0, "rel": 0.0, "margin": math.inf, "row": -1}
