@@ -5,7 +5,8 @@ instructions numba compiles for, the SIMD kernels NumPy dispatches to, the kerne
 and NumPy) selects. Each can be forced down to an older CPU by an environment variable, so a more capable
 host can run the suites as a less capable one would. Each configuration gets its own cache
 (``STUDY_CACHE_DIR``), so no generated code, compiled function or saved result of another configuration is
-reused, and its own copy of the snapshot's tables for ``make verify``.
+reused, and its own copy of the committed snapshot's tables for ``make verify`` (a ``make reproduce`` under
+emulation rewrites ``reports/`` of the checkout it runs in).
 
 Emulation reaches only downwards: on a host without AVX-512 the ``avx2`` configuration changes nothing.
 ``python -m study.emulate --show`` prints what each configuration switches off on this host. Exudyn's
@@ -17,10 +18,12 @@ Usage: ``python -m study.emulate [--hosts avx2 sse2] [--targets test verify]`` (
 from __future__ import annotations
 
 import argparse
+import io
 import os
 import shutil
 import subprocess
 import sys
+import tarfile
 import time
 from pathlib import Path
 
@@ -67,6 +70,19 @@ def show(host: str) -> str:
     return out.stdout.strip()
 
 
+def committed_snapshot(dest: Path) -> Path:
+    """``reports/tables`` as committed at HEAD, written to ``dest/tables`` (replacing what was there)."""
+    shutil.rmtree(dest, ignore_errors=True)
+    dest.mkdir(parents=True)
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "HEAD", "reports/tables"], capture_output=True,
+                             check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+        tar.extractall(dest, filter="data")
+    shutil.move(dest / "reports" / "tables", dest / "tables")
+    (dest / "reports").rmdir()
+    return dest / "tables"
+
+
 def run(host: str, targets: list[str]) -> dict[str, tuple[int, float]]:
     """Run each make target under ``host``; exit code and wall seconds per target."""
     env = environment(host)
@@ -74,9 +90,8 @@ def run(host: str, targets: list[str]) -> dict[str, tuple[int, float]]:
     outcome = {}
     for target in targets:
         cmd = ["make", "--no-print-directory", target]
-        if target == "verify":  # compare with a copy of the snapshot; leave the tracked reports/ alone
-            shutil.rmtree(scratch, ignore_errors=True)
-            shutil.copytree(ROOT / "reports" / "tables", scratch / "tables")
+        if target == "verify":  # compare with the committed snapshot (a reproduce run may have rewritten reports/)
+            committed_snapshot(scratch)
             cmd.append(f"OUT={scratch}")
         print(f"== {host}: {' '.join(cmd)}", flush=True)
         t0 = time.perf_counter()
