@@ -81,6 +81,12 @@ def import_graph(package: Path | None = None) -> dict[str, set[str]]:
 
 
 @lru_cache(maxsize=None)
+def _package_graph(package: Path) -> tuple[dict[str, Path], dict[str, set[str]]]:
+    """The modules and the import graph of ``package``, parsed once per process."""
+    return module_names(package), import_graph(package)
+
+
+@lru_cache(maxsize=None)
 def dependencies(*entries: str) -> tuple[Path, ...]:
     """The files of the modules reachable from ``entries`` (the entries included), sorted.
 
@@ -89,8 +95,7 @@ def dependencies(*entries: str) -> tuple[Path, ...]:
     KeyError
         An entry is not a module of the package (a stale name would silently drop code from a key).
     """
-    files = module_names()
-    graph = import_graph()
+    files, graph = _package_graph(PACKAGE)
     unknown = [e for e in entries if e not in files]
     if unknown:
         raise KeyError(f"not modules of {PACKAGE.name}: {', '.join(unknown)}")
