@@ -13,7 +13,9 @@ the file, the key, the offending value and the rule it breaks.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -135,12 +137,22 @@ def _path_for(mechanism: str, reference_dir: Path | None) -> Path:
 
 
 def _read(path: Path) -> dict[str, Any]:
+    """The parsed TOML file (a fresh copy; parsed once per content, the stamp being path, size and time)."""
+    try:
+        stat = Path(path).stat()
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: parameter file not found") from None
+    return copy.deepcopy(_parse(str(path), stat.st_size, stat.st_mtime_ns))
+
+
+@functools.lru_cache(maxsize=64)
+def _parse(path: str, size: int, mtime_ns: int) -> dict[str, Any]:
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ParameterError(f"{path}: parameter file not found") from None
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"{path}: not valid TOML: {exc}") from None
 
 
