@@ -75,33 +75,57 @@ def _default_friction(eom) -> str:
     return "exact" if active else "none"
 
 
-def _simulate(args: argparse.Namespace) -> int:
-    from study.simulate import resolve, simulate
+# simulate()'s arguments set by a flag of the simulate command (an --option must not set them again)
+SIMULATE_FLAGS = {"variant": "--variant", "method": "--method", "integrator": "--integrator",
+                  "acceleration_solver": "--acceleration-solver", "backend": "--backend", "friction": "--friction",
+                  "friction_eps": "--friction-eps", "friction_sgn": "--friction-sgn", "rtol": "--rtol", "atol": "--atol",
+                  "max_evaluations": "--max-evaluations", "step": "--step", "t_end": "--t-end",
+                  "output_step": "--output-step"}
 
+
+def method_options(items: list[str] | None, method: str) -> dict:
+    """The --option KEY=VALUE items of ``method``, each parsed to its declared type; a ValueError names the item."""
+    from study.solver.stabilization import check_options, method_options as declared_options
+
+    declared = declared_options(method)
     options = {}
-    for item in args.option or []:
+    for item in items or []:
         key, _, value = item.partition("=")
-        if not value:
+        if not key or not value:
             raise ValueError(f"--option {item!r}: expected KEY=VALUE (e.g. omega=10 or sgn=tanh)")
+        if key in SIMULATE_FLAGS:
+            raise ValueError(f"--option {key}: set it with {SIMULATE_FLAGS[key]}, not as a method option")
+        if key in options:
+            raise ValueError(f"--option {key} given twice ({options[key]!r} and {value!r})")
+        kind = declared.get(key)
+        if kind is None:
+            valid = ", ".join(declared) or "none (it takes no options)"
+            raise ValueError(f"--option {key}: not an option of --method {method}; valid options: {valid}")
         try:
-            options[key] = float(value)
+            options[key] = int(value) if kind == "int" else value if kind == "str" else float(value)
         except ValueError:
-            options[key] = value
-    if args.integrator == "RK4" and (args.rtol is not None or args.atol is not None):
-        raise ValueError("--rtol/--atol do not apply to --integrator RK4 (fixed step; give --step)")
-    tolerances = {k: v for k, v in (("rtol", args.rtol), ("atol", args.atol)) if v is not None}
-    if args.max_evaluations is not None:
-        options["max_evaluations"] = args.max_evaluations
+            wanted = "a whole number" if kind == "int" else "a number"
+            raise ValueError(f"--option {key} = {value!r} must be {wanted}") from None
+    return check_options(method, options, source="--option ")
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from study.simulate import DEFAULT_OUTPUT_STEP, check_arguments, resolve, simulate
+
+    options = method_options(args.option, args.method)
+    run = {k: getattr(args, k) for k in ("variant", "method", "integrator", "acceleration_solver", "backend", "friction",
+                                         "friction_eps", "friction_sgn", "rtol", "atol", "step", "t_end",
+                                         "max_evaluations")}
+    run["output_step"] = DEFAULT_OUTPUT_STEP if args.output_step is None else args.output_step
+    if run["friction"] is None:  # the parameter set's friction: exact stick/slip where a contact has friction
+        run["friction"] = _default_friction(resolve(args.mechanism, args.variant)[0])
+    if run["friction"] == "none":
+        run["friction"] = None
+    check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
+                    names=SIMULATE_FLAGS)
     _writable(args.out, "--out")
-    friction = args.friction
-    if friction is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-        friction = _default_friction(resolve(args.mechanism, args.variant)[0])
-    result = simulate(args.mechanism, variant=args.variant, t_end=args.t_end, method=args.method,
-                      integrator=args.integrator, step=args.step, acceleration_solver=args.acceleration_solver,
-                      backend=args.backend, friction=None if friction == "none" else friction,
-                      friction_eps=args.friction_eps, friction_sgn=args.friction_sgn,
-                      progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None,
-                      **tolerances, **options)
+    result = simulate(args.mechanism, **run, **options,
+                      progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None)
     path = result.save(args.out)
     s = result.summary()
     print(f"{args.mechanism}/{args.variant} {args.method} {args.integrator} ({args.backend}), "
@@ -235,6 +259,11 @@ def _verify(args: argparse.Namespace) -> int:
     from study.pipeline import environment_workers
     from study.verify import main_verify
 
+    for ulps in args.ulps or []:
+        if ulps == 0:
+            raise ValueError("--ulps 0 moves nothing: the perturbed run would be the run itself (give e.g. 4 or -4)")
+    if args.ulps and not args.perturb:
+        raise ValueError(f"--ulps {args.ulps[0]} applies to --perturb only")
     return main_verify(args.out, cache_dir(), args.studies or None, args.workers or environment_workers(),
                        args.perturb, args.ulps, args.cases)
 
@@ -285,8 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
     from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
 
-    from study.simulate import BACKENDS, simulate
-    from study.solver.friction import FRICTION_TREATMENTS
+    from study.simulate import BACKENDS, DEFAULT_OUTPUT_STEP, simulate
+    from study.solver.friction import DEFAULT_EPS, FRICTION_TREATMENTS
 
     defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
 
@@ -302,19 +331,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
                    help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
                         "stick/slip where a contact has friction, else none)")
-    p.add_argument("--friction-eps", type=float, default=defaults["friction_eps"], metavar="EPS",
-                   help=f"regularization width [m/s] of 'regularized', stick band of 'sign' "
-                        f"(default {defaults['friction_eps']:g})")
-    p.add_argument("--friction-sgn", default=defaults["friction_sgn"], choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
-                   help=f"smooth sgn of 'regularized' (default {defaults['friction_sgn']})")
+    p.add_argument("--friction-eps", type=float, default=None, metavar="EPS",
+                   help=f"regularization width [m/s] of 'regularized', stick band of 'sign' (default {DEFAULT_EPS:g})")
+    p.add_argument("--friction-sgn", default=None, choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
+                   help="smooth sgn of 'regularized' (default tanh)")
     p.add_argument("--rtol", type=float, default=None, help="relative tolerance (adaptive integrators; default 1e-8)")
     p.add_argument("--atol", type=float, default=None, help="absolute tolerance (adaptive integrators; default 1e-10)")
     p.add_argument("--max-evaluations", type=float, default=None,
                    help="bound on evaluations (default in reference/tolerances.toml); confirms a large fixed-step run")
-    p.add_argument("--step", type=float, default=None, help="fixed step h (RK4)")
-    p.add_argument("--t-end", type=float, default=20.0)
+    p.add_argument("--step", type=float, default=None, help="fixed step h [s] (RK4 only)")
+    p.add_argument("--t-end", type=float, default=20.0, help="end time [s] (default 20)")
+    p.add_argument("--output-step", type=float, default=None,
+                   help=f"spacing of the saved samples [s] (default {DEFAULT_OUTPUT_STEP:g})")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",
-                   help="stabilization option, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8")
+                   help="option of the --method, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8, max_iter=5")
     p.add_argument("--out", type=Path, required=True, help="output path (writes .csv and .json)")
     p.set_defaults(func=_simulate)
 

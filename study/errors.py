@@ -5,8 +5,9 @@ Two families:
 - input errors (``ValueError`` subclasses): the user asked for something that cannot be done as
   asked (equations that are not what they claim, a state off the constraints, a run too large);
 - run failures (:class:`SimulationError`, a ``RuntimeError``): a run started and could not go on
-  (non-finite values, a singular configuration, a bound reached). Each carries the time and the
-  quantity, and its message says the likely cause.
+  (non-finite or complex values, a mass matrix no longer positive-definite, a user's callable that raised,
+  a singular configuration, a bound reached). Each carries the time and the quantity, and its message
+  says the likely cause.
 
 The command line turns any of them into one line on stderr and a non-zero exit code.
 """
@@ -47,6 +48,12 @@ class SimulationError(RuntimeError):
 
 class NonFiniteError(SimulationError):
     """A NaN or infinity in an evaluation or a saved sample."""
+
+
+class UserFunctionError(SimulationError):
+    """A user's equation callable raised, or returned a value the solver cannot use (wrong shape, not numbers),
+    during a run. ``quantity`` names the callable ('forces', 'mass', ...); an exception it raised is the
+    ``__cause__``. (Complex values are a :class:`NonFiniteError`.)"""
 
 
 class SingularConfigurationError(SimulationError):

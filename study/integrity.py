@@ -7,11 +7,13 @@ naming the file and what differs, so the caller recomputes instead of trusting i
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import tempfile
 from pathlib import Path
+from typing import Mapping
 
 from study.errors import ResultIntegrityError
 
@@ -50,6 +52,49 @@ def atomic_write(path: Path, text: str) -> None:
         raise
 
 
+def stage_files(files: Mapping[Path, str]) -> list[tuple[Path, Path]]:
+    """Write each text (with :func:`atomic_write`) to a private staging folder beside its file; replace nothing.
+
+    Returns the (staged, final) pairs for :func:`commit_staged`. A failure while writing (disk full, an
+    interruption) removes what was staged and propagates: no file was replaced.
+    """
+    staged: list[tuple[Path, Path]] = []
+    folders: dict[Path, Path] = {}
+    try:
+        for path, text in files.items():
+            path = Path(path)
+            if path.parent not in folders:
+                folders[path.parent] = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.",
+                                                             suffix=".staging"))
+            staged.append((folders[path.parent] / path.name, path))
+            atomic_write(staged[-1][0], text)
+    except BaseException:
+        _discard_staged(staged, folders.values())
+        raise
+    return staged
+
+
+def commit_staged(staged: list[tuple[Path, Path]]) -> None:
+    """Rename files written by :func:`stage_files` into place, in order, and remove the staging folders.
+
+    Renames within a folder do not fail in practice; if one did (or the process were interrupted between
+    two), the files before it are new and the rest keep their previous content.
+    """
+    try:
+        for tmp, path in staged:
+            os.replace(tmp, path)
+    finally:
+        _discard_staged(staged, {tmp.parent for tmp, _ in staged})
+
+
+def _discard_staged(staged, folders) -> None:
+    for tmp, _ in staged:
+        tmp.unlink(missing_ok=True)
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            Path(folder).rmdir()
+
+
 def _sidecar(path: Path) -> Path:
     return path.with_name(path.name + ".sha256")
 
@@ -80,19 +125,25 @@ def verify_text(path: Path, text: str, rows: int | None, sha256: str | None) -> 
     """Raise ResultIntegrityError unless ``text`` (read from ``path``) has the recorded rows and SHA-256."""
     if rows is None or sha256 is None:
         raise ResultIntegrityError(f"{path}: no row count and checksum recorded (written by an older version)")
+    if isinstance(rows, bool) or not isinstance(rows, int) or not isinstance(sha256, str):
+        raise ResultIntegrityError(f"{path}: no row count and checksum recorded, but {rows!r:.40} and "
+                                   f"{sha256!r:.40} (the record was edited)")
     got_rows = data_rows(text)
     if got_rows != rows:
         raise ResultIntegrityError(f"{path}: {got_rows} data rows, {rows} recorded when it was saved (truncated?)")
     got = sha256_text(text)
     if got != sha256:
+        now = ("now empty: 0 data rows and no header" if not text
+               else f"{got_rows} data row{'' if got_rows == 1 else 's'}, as recorded")
         raise ResultIntegrityError(f"{path}: SHA-256 {got[:12]}... differs from the recorded {sha256[:12]}... "
-                                   f"(the file was changed after it was saved)")
+                                   f"(the file was changed after it was saved; {now})")
 
 
-def read_json(path: Path) -> dict:
-    """A JSON file as a dict; ResultIntegrityError if it is not valid JSON (garbage, half a file)."""
+def read_json(path: Path, text: str | None = None) -> dict:
+    """A JSON file (or its ``text``, already read) as a dict; ResultIntegrityError if it is not valid JSON
+    (garbage, half a file) or not an object."""
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(Path(path).read_text() if text is None else text)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ResultIntegrityError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(data, dict):

@@ -25,6 +25,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
+from study.arguments import shown
+
 REFERENCE_DIR = Path(__file__).resolve().parent.parent / "reference"
 
 # Validation rules, by name. Each returns None when the value is fine, else what is wrong.
@@ -39,9 +41,9 @@ def _check_number(value: Any, rule: str) -> str | None:
     if not math.isfinite(value):
         return "must be finite"
     if rule == POSITIVE and not value > 0:
-        return "must be > 0"
+        return "must be > 0 (rule 'positive')"
     if rule == NONNEGATIVE and not value >= 0:
-        return "must be >= 0"
+        return "must be >= 0 (rule 'nonnegative')"
     return None
 
 
@@ -182,7 +184,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     problems: list[str] = []
 
     def problem(key: str, value: Any, rule: str) -> None:
-        problems.append(f"  {key} = {value!r}: {rule}")
+        problems.append(f"  {key} = {shown(value)}: {rule}")
 
     unknown_sections = set(raw) - {"meta", "parameters", "initial_conditions", "variants"}
     for key in sorted(unknown_sections):
@@ -225,6 +227,10 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
                                    or not all(isinstance(c, str) for c in entry["choices"])):
             problem(f"{key}.choices", entry["choices"], "must be a non-empty list of strings")
             continue
+        for text_key in ("unit", "source", "doc"):
+            if not isinstance(entry[text_key], str) or not entry[text_key].strip():
+                problem(f"{key}.{text_key}", entry[text_key], "must be non-empty text (write '-' for a dimensionless "
+                                                              "unit)" if text_key == "unit" else "must be non-empty text")
         fields[name] = {"rule": entry["rule"]} if "rule" in entry else {"choices": tuple(entry["choices"])}
         values[name] = entry["value"]
         units[name] = entry["unit"]

@@ -2,7 +2,9 @@
 
 A result holds sampled time series (time, q, qd, qdd, lambda, Phi, Phidot, energies, forces of
 interest), solver statistics and metadata. It is saved as a CSV of the series (17 significant
-digits, so the round trip is exact) plus a JSON sidecar with statistics and metadata.
+digits, so the round trip is exact) plus a JSON sidecar with statistics and metadata. The sidecar
+records the CSV's row count and SHA-256, and its own SHA-256 (``json_sha256``, of its canonical
+text without that key): both files are checked before a saved result is reused.
 """
 
 from __future__ import annotations
@@ -19,9 +21,12 @@ import numpy as np
 import pandas as pd
 
 from study.errors import NonFiniteError, ResultIntegrityError
-from study.integrity import atomic_write, data_rows, read_json, sha256_text, verify_text
+from study.integrity import commit_staged, data_rows, read_json, sha256_text, stage_files, verify_text
 
 Array = np.ndarray
+
+# The sidecar's own checksum: SHA-256 of its canonical text (sorted keys, indent 1) without this key.
+JSON_CHECKSUM_KEY = "json_sha256"
 
 # Packages whose versions go into every result's metadata.
 TRACKED_PACKAGES = ("study", "numpy", "scipy", "sympy", "pandas", "exudyn", "numba")
@@ -141,54 +146,108 @@ class SimulationResult:
         return pd.DataFrame(cols)
 
     def save(self, path: str | Path) -> Path:
-        """Write ``<path>.csv`` and ``<path>.json`` atomically; returns the CSV path."""
+        """Write ``<path>.csv`` and ``<path>.json`` as one; returns the CSV path.
+
+        Both files are written to temporary files first and only then renamed into place, so a failed
+        save (disk full, an interruption) replaces neither: a previous result there stays intact.
+        """
         base = _base(path)
         base.parent.mkdir(parents=True, exist_ok=True)
         self.check_finite()
         csv_text = self.to_dataframe().to_csv(index=False, float_format="%.17g", lineterminator="\n")
-        sidecar = {
+        sidecar = _jsonable({
             "shape": {"m": self.q.shape[1], "r": self.lam.shape[1]},
             "energies": list(self.energies),
             "forces": list(self.forces),
             "stats": self.stats,
             "meta": self.meta,
             "csv": {"rows": data_rows(csv_text), "sha256": sha256_text(csv_text)},
-        }
-        atomic_write(_with(base, ".csv"), csv_text)
-        atomic_write(_with(base, ".json"), json.dumps(_jsonable(sidecar), indent=1, sort_keys=True))
-        return _with(base, ".csv")
+        })
+        sidecar[JSON_CHECKSUM_KEY] = _json_checksum(sidecar)
+        csv_path, json_path = _with(base, ".csv"), _with(base, ".json")
+        try:  # the JSON last: a result is saved once its JSON exists
+            staged = stage_files({csv_path: csv_text, json_path: json.dumps(sidecar, indent=1, sort_keys=True)})
+        except OSError as exc:
+            raise OSError(exc.errno, f"{base}: result not saved, writing {csv_path.name} and {json_path.name} "
+                                     f"failed ({exc}); no file was replaced, any previous result intact") from exc
+        try:
+            commit_staged(staged)
+        except OSError as exc:
+            raise OSError(exc.errno, f"{base}: result saved only in part, renaming its files failed ({exc}); "
+                                     f"{json_path.name} and {csv_path.name} may not match: it will be refused "
+                                     f"when read, not reused") from exc
+        return csv_path
 
     @classmethod
     def verify(cls, path: str | Path) -> dict:
         """Check a saved result before reuse; returns its sidecar. ResultIntegrityError names what is wrong.
 
-        The JSON must parse and record the CSV's row count and SHA-256; the CSV must match both
-        (a truncated, cut or edited CSV fails).
+        The JSON must parse, record the CSV's row count and SHA-256, and still have its own SHA-256
+        (``json_sha256``; an edited statistic or setting fails) and be the very text saved (a sidecar
+        rewritten with the same values fails too); the CSV must match what the JSON
+        records (a truncated, cut or edited CSV fails).
         """
         base = _base(path)
+        side, text = _read_sidecar(base)
         json_path, csv_path = _with(base, ".json"), _with(base, ".csv")
-        side = read_json(json_path)
+        record = side.get("csv") if isinstance(side.get("csv"), dict) else {}
+        if record.get("rows") is None or record.get("sha256") is None:
+            raise ResultIntegrityError(f"{csv_path}: no row count and checksum recorded in {json_path.name} "
+                                       f"(written by an older version, or edited)")
+        recorded = side.pop(JSON_CHECKSUM_KEY, None)
+        if not isinstance(recorded, str):
+            raise ResultIntegrityError(f"{json_path}: no checksum of its own ({JSON_CHECKSUM_KEY}; written by an "
+                                       f"older version, or edited): not reused")
+        got = _json_checksum(side)
+        if got != recorded:
+            raise ResultIntegrityError(f"{json_path}: SHA-256 {got[:12]}... of its content differs from the recorded "
+                                       f"{recorded[:12]}... (the file was changed after it was saved)")
+        saved_text = json.dumps({**side, JSON_CHECKSUM_KEY: recorded}, indent=1, sort_keys=True)
+        if text != saved_text:  # same values, other text: rewritten (by hand or a tool) after it was saved
+            raise ResultIntegrityError(f"{json_path}: SHA-256 {sha256_text(text)[:12]}... of its text differs from "
+                                       f"{sha256_text(saved_text)[:12]}..., that of the text saved with these values "
+                                       f"(the file was rewritten after it was saved)")
         if not csv_path.exists():
             raise ResultIntegrityError(f"{csv_path}: missing (its JSON {json_path.name} exists)")
-        record = side.get("csv") if isinstance(side.get("csv"), dict) else {}
         verify_text(csv_path, csv_path.read_text(), record.get("rows"), record.get("sha256"))
         return side
 
     @classmethod
     def load(cls, path: str | Path, verify: bool = True) -> "SimulationResult":
-        """Read a saved result; with ``verify`` (default) it is checked first (:meth:`verify`)."""
+        """Read a saved result; with ``verify`` (default) it is checked first (:meth:`verify`).
+
+        Whether verified or not, a sidecar or CSV that does not describe a result (missing keys, columns
+        that do not match) raises ResultIntegrityError naming the file.
+        """
         base = _base(path)
-        side = cls.verify(base) if verify else json.loads(_with(base, ".json").read_text())
-        df = pd.read_csv(_with(base, ".csv"))
-        m, r = side["shape"]["m"], side["shape"]["r"]
-        data = df.to_numpy()
+        side = cls.verify(base) if verify else _read_sidecar(base)[0]
+        json_path, csv_path = _with(base, ".json"), _with(base, ".csv")
+        m, r, energy_names, force_names, stats, meta = _layout(side, json_path)
+        try:
+            df = pd.read_csv(csv_path)
+        except FileNotFoundError:
+            raise ResultIntegrityError(f"{csv_path}: missing (its JSON {json_path.name} exists)") from None
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+            raise ResultIntegrityError(f"{csv_path}: not a readable CSV ({exc})") from None
+        expected = 1 + 3 * m + 3 * r + len(energy_names) + len(force_names)
+        columns = [*(f"energy:{n}" for n in energy_names), *(f"force:{n}" for n in force_names)]
+        missing = [c for c in columns if c not in df.columns]
+        if df.shape[1] != expected or missing:
+            raise ResultIntegrityError(
+                f"{csv_path}: {df.shape[1]} columns, {expected} expected from {json_path.name} (m = {m} "
+                f"coordinates, r = {r} constraints, {len(energy_names)} energies, {len(force_names)} forces)"
+                + (f"; missing {', '.join(missing)}" if missing else ""))
+        try:
+            data = df.to_numpy(dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ResultIntegrityError(f"{csv_path}: a value is not a number ({exc})") from None
         t = data[:, 0]
         q, qd, qdd = data[:, 1:1 + m], data[:, 1 + m:1 + 2 * m], data[:, 1 + 2 * m:1 + 3 * m]
         k = 1 + 3 * m
         lam, phi, phidot = data[:, k:k + r], data[:, k + r:k + 2 * r], data[:, k + 2 * r:k + 3 * r]
-        energies = {n: df[f"energy:{n}"].to_numpy() for n in side["energies"]}
-        forces = {n: df[f"force:{n}"].to_numpy() for n in side["forces"]}
-        return cls(t, q, qd, qdd, lam, phi, phidot, energies, forces, side["stats"], side["meta"])
+        energies = {n: df[f"energy:{n}"].to_numpy(dtype=float) for n in energy_names}
+        forces = {n: df[f"force:{n}"].to_numpy(dtype=float) for n in force_names}
+        return cls(t, q, qd, qdd, lam, phi, phidot, energies, forces, stats, meta)
 
 
 def _base(path: str | Path) -> Path:
@@ -199,6 +258,55 @@ def _base(path: str | Path) -> Path:
 
 def _with(base: Path, suffix: str) -> Path:
     return base.with_name(base.name + suffix)
+
+
+def _json_checksum(sidecar: Mapping[str, Any]) -> str:
+    """SHA-256 of the sidecar's canonical text without its own checksum (what ``json_sha256`` records)."""
+    rest = {k: v for k, v in sidecar.items() if k != JSON_CHECKSUM_KEY}
+    return sha256_text(json.dumps(rest, indent=1, sort_keys=True))
+
+
+def _read_sidecar(base: Path) -> tuple[dict, str]:
+    """The JSON sidecar of a saved result and its text; ResultIntegrityError if it is missing or not a JSON object."""
+    json_path = _with(base, ".json")
+    if not json_path.exists():
+        csv_path = _with(base, ".csv")
+        also = (f" (its CSV {csv_path.name} exists)" if csv_path.exists()
+                else f", and so is {csv_path.name}: no result is saved there")
+        raise ResultIntegrityError(f"{json_path}: missing{also}")
+    try:
+        text = json_path.read_text()
+    except UnicodeDecodeError as exc:
+        raise ResultIntegrityError(f"{json_path}: not valid JSON ({exc})") from None
+    return read_json(json_path, text), text
+
+
+def _layout(side: Mapping[str, Any], json_path: Path) -> tuple[int, int, list, list, dict, dict]:
+    """(m, r, energy names, force names, stats, meta) from a sidecar; ResultIntegrityError if malformed."""
+    problems = []
+    shape = side.get("shape")
+    m = shape.get("m") if isinstance(shape, dict) else None
+    r = shape.get("r") if isinstance(shape, dict) else None
+    for key, value in (("shape.m", m), ("shape.r", r)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            problems.append(f"{key} is {_short(value)}, not a count")
+    names = {}
+    for key in ("energies", "forces"):
+        value = side.get(key)
+        if not isinstance(value, list) or not all(isinstance(n, str) for n in value):
+            problems.append(f"{key} is {_short(value)}, not a list of names")
+        names[key] = value
+    for key in ("stats", "meta"):
+        if not isinstance(side.get(key), dict):
+            problems.append(f"{key} is {_short(side.get(key))}, not an object")
+    if problems:
+        raise ResultIntegrityError(f"{json_path}: not the sidecar of a saved result ({'; '.join(problems)})")
+    return m, r, names["energies"], names["forces"], side["stats"], side["meta"]
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = "missing" if value is None else repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _jsonable(value: Any) -> Any:

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import time
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
-from study.model.eom import EquationsOfMotion, as_state
+from study import arguments
+from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
 from study.reference_data import tolerance
 from study.results import SimulationResult
@@ -17,20 +18,18 @@ from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
-from study.solver.stabilization import Stabilization
+from study.solver.stabilization import Stabilization, check_options
 
 __all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "build_dynamics", "check_run_size", "resolve", "simulate"]
 
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
 DEFAULT_OUTPUT_STEP = 0.01
+# Tolerances of the adaptive integrators unless given: the study's working accuracy (reference/tolerances.toml
+# keeps the reference runs' own).
+DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10
 # 'reference': Python + scipy (the default); 'compiled': study.fast (numba).
 BACKENDS = ("reference", "compiled")
-
-
-def _check_positive(name: str, value) -> None:
-    if value is not None and not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} = {value!r} must be finite and > 0")
 
 
 def resolve(eom_or_mechanism, variant: str | None):
@@ -44,7 +43,7 @@ def resolve(eom_or_mechanism, variant: str | None):
 
         ps, eom = load(eom_or_mechanism, variant or "seed")
         return eom, ps
-    raise TypeError(f"expected an EquationsOfMotion or a mechanism name, got {type(eom_or_mechanism).__name__}")
+    raise ValueError(f"eom_or_mechanism = {eom_or_mechanism!r} must be an EquationsOfMotion or a mechanism name")
 
 
 def simulate(
@@ -55,16 +54,16 @@ def simulate(
     *,
     method: str | Stabilization = "none",
     integrator: str = "RK45",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
+    rtol: float | None = None,
+    atol: float | None = None,
     step: float | None = None,
     output_step: float = DEFAULT_OUTPUT_STEP,
     acceleration_solver: str = "multiplier",
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
     friction: str | None = None,
-    friction_eps: float = DEFAULT_EPS,
-    friction_sgn: str = "tanh",
+    friction_eps: float | None = None,
+    friction_sgn: str | None = None,
     resistance_reading: str | None = None,
     backend: str = "reference",
     check: bool = True,
@@ -90,7 +89,9 @@ def simulate(
         ``study.solver.stabilization.Stabilization`` object (e.g. ``Baumgarte(d=1, omega=10)``, or a
         user's subclass on the reference backend), whose fields are its options.
     integrator : str
-        'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: rtol/atol) or 'RK4' (fixed ``step``).
+        'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: ``rtol``, default 1e-8, and ``atol``,
+        default 1e-10) or 'RK4' (fixed ``step``, no longer than ``t_end``). An argument the chosen
+        integrator would ignore (``step`` for an adaptive one, ``rtol``/``atol`` for RK4) is refused.
     acceleration_solver : str
         'multiplier', 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank Phi_q: a run
         stops at a singular pose with a SingularConfigurationError naming the time, pose and rank), or
@@ -100,9 +101,10 @@ def simulate(
     friction : {None, 'exact', 'regularized', 'sign'}
         Coulomb friction at the equations' sliding contacts (``study.solver.friction``); None ignores
         the contacts' friction data. 'exact': event-located stick/slip; 'regularized': sgn replaced
-        by ``friction_sgn`` ('tanh', 'sat', 'arctan', 'sqrt') of width ``friction_eps`` [m/s];
-        'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps`` also sets the
-        band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. The result gains
+        by ``friction_sgn`` ('tanh', 'sat', 'arctan', 'sqrt'; default 'tanh') of width ``friction_eps``
+        [m/s] (default 1e-3); 'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps``
+        also sets the band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. A
+        width or sgn the chosen treatment does not use is refused. The result gains
         forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
     resistance_reading : {None, 'holds', 'sliding_only'}
         Whether a contact's constant resistance counts in the static limit of the 'exact' treatment
@@ -137,15 +139,20 @@ def simulate(
     -------
     SimulationResult
     """
+    given = check_arguments(t_end=t_end, method=method, integrator=integrator, rtol=rtol, atol=atol, step=step,
+                            output_step=output_step, acceleration_solver=acceleration_solver, variant=variant,
+                            progress=progress, friction=friction, friction_eps=friction_eps,
+                            friction_sgn=friction_sgn, resistance_reading=resistance_reading, backend=backend,
+                            check=check, max_evaluations=max_evaluations, min_step=min_step,
+                            max_output_bytes=max_output_bytes)
+    t_end, step, max_evaluations = given["t_end"], given["step"], given["max_evaluations"]
+    rtol = DEFAULT_RTOL if rtol is None else given["rtol"]
+    atol = DEFAULT_ATOL if atol is None else given["atol"]
+    friction_eps = DEFAULT_EPS if friction_eps is None else given["friction_eps"]
+    friction_sgn = "tanh" if friction_sgn is None else friction_sgn
+    if not isinstance(method, Stabilization):
+        method_options = check_options(method, method_options)
     eom, ps = resolve(eom_or_mechanism, variant)
-    for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("step", step),
-                        ("output_step", output_step), ("max_evaluations", max_evaluations), ("min_step", min_step),
-                        ("max_output_bytes", max_output_bytes)):
-        _check_positive(name, value)
-    if integrator not in INTEGRATORS:
-        raise ValueError(f"unknown integrator {integrator!r}; valid choices: {', '.join(INTEGRATORS)}")
-    if integrator == "RK4" and step is None:
-        raise ValueError("integrator 'RK4' is fixed-step: give step= (the step size h > 0)")
     min_rtol = tolerance("integrator_min_rtol")
     if backend == "reference" and integrator != "RK4" and rtol < min_rtol:
         raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
@@ -160,10 +167,9 @@ def simulate(
         state = initial_state(ps, eom)
         q0 = state.q if q0 is None else q0
         qd0 = state.qd if qd0 is None else qd0
-    q0, qd0 = as_state(q0, qd0, eom.n_coordinates)
+    names = eom.coordinate_names
+    q0, qd0 = (arguments.state(k, v, eom.n_coordinates, names) for k, v in (("q0", q0), ("qd0", qd0)))
     eom.check_shapes(q0, qd0)
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
     check_run_size(eom, q0, qd0, float(t_end), integrator, step, output_step, friction, max_evaluations,
                    max_output_bytes)
     rank_tolerant = make_acceleration_solver(acceleration_solver).passes_singular
@@ -203,7 +209,7 @@ def simulate(
             return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
 
     t_out = output_times(float(t_end), output_step)
-    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator == "RK4" else None)
+    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator == "RK4" else None, float(t_end))
     cpu0 = time.process_time()
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values
         traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
@@ -232,6 +238,70 @@ def simulate(
                                     t_end=t_end, stabilization=stabilization, law=law))
     return result
 
+
+
+def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step, acceleration_solver, variant,
+                    progress, friction, friction_eps, friction_sgn, resistance_reading, backend, check,
+                    max_evaluations, min_step, max_output_bytes, names: Mapping[str, str] | None = None) -> dict:
+    """:func:`simulate`'s arguments checked before any work: types, ranges, choices, and the combinations
+    that would be silently ignored (a step for an adaptive integrator, a width or sgn the friction treatment
+    does not use, a step or output step longer than the horizon). Returns the numbers converted.
+
+    ``names`` maps an argument to the way the user gave it (the command line passes its flags)."""
+    from study.solver.accelerations import ACCELERATION_SOLVERS
+    from study.solver.friction import FRICTION_TREATMENTS, RESISTANCE_READINGS
+    from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
+
+    names = names or {}
+
+    def w(key: str) -> str:
+        return names.get(key, key)
+
+    def n(key, value, **kw):
+        return arguments.number(w(key), value, **kw)
+
+    given = {"t_end": n("t_end", t_end), "output_step": n("output_step", output_step),
+             "rtol": n("rtol", rtol, optional=True), "atol": n("atol", atol, optional=True),
+             "step": n("step", step, optional=True), "friction_eps": n("friction_eps", friction_eps, optional=True),
+             "max_evaluations": n("max_evaluations", max_evaluations, whole=True, optional=True),
+             "min_step": n("min_step", min_step, optional=True),
+             "max_output_bytes": n("max_output_bytes", max_output_bytes, optional=True)}
+    if not isinstance(method, Stabilization):
+        arguments.choice(w("method"), method, STABILIZATIONS)
+    arguments.choice(w("integrator"), integrator, INTEGRATORS)
+    arguments.choice(w("acceleration_solver"), acceleration_solver, ACCELERATION_SOLVERS)
+    arguments.choice(w("backend"), backend, BACKENDS)
+    arguments.choice(w("friction"), friction, FRICTION_TREATMENTS, optional=True)
+    if friction_sgn == "sign":
+        raise ValueError(f"{w('friction_sgn')} = 'sign' is not a smooth sgn (the plain sgn is {w('friction')}='sign'); "
+                         f"valid choices: {', '.join(k for k in SIGN_FUNCTIONS if k != 'sign')}")
+    arguments.choice(w("friction_sgn"), friction_sgn, [k for k in SIGN_FUNCTIONS if k != "sign"], optional=True)
+    arguments.choice(w("resistance_reading"), resistance_reading, RESISTANCE_READINGS, optional=True)
+    arguments.text(w("variant"), variant, optional=True)
+    arguments.function(w("progress"), progress)
+    arguments.flag(w("check"), check)
+    t_end = given["t_end"]
+    if integrator == "RK4":
+        if step is None:
+            raise ValueError(f"{w('integrator')} RK4 is fixed-step: give {w('step')} (the step size h > 0)")
+        if rtol is not None or atol is not None:
+            raise ValueError(f"{w('rtol')}/{w('atol')} do not apply to {w('integrator')} RK4 (fixed step)")
+        if given["step"] > t_end:
+            raise ValueError(f"{w('step')} = {step:g} s is longer than {w('t_end')} = {t_end:g} s: RK4 would take one "
+                             f"shortened step")
+    elif step is not None:
+        raise ValueError(f"{w('step')} = {step!r} applies to the fixed-step integrator RK4; {integrator} is adaptive "
+                         f"(its accuracy is set by {w('rtol')} and {w('atol')})")
+    if given["output_step"] > t_end:
+        raise ValueError(f"{w('output_step')} = {output_step:g} s is longer than {w('t_end')} = {t_end:g} s (the result "
+                         f"would hold only t = 0 and t_end)")
+    if friction_eps is not None and friction not in ("regularized", "sign"):
+        raise ValueError(f"{w('friction_eps')} = {friction_eps!r} applies to friction 'regularized' (its width) and "
+                         f"'sign' (its stick band); {w('friction')} = {friction or 'none'} has no width")
+    if friction_sgn is not None and friction != "regularized":
+        raise ValueError(f"{w('friction_sgn')} = {friction_sgn!r} applies to friction 'regularized' only; "
+                         f"{w('friction')} = {friction or 'none'} does not use it")
+    return given
 
 
 def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_end: float, integrator: str,

@@ -134,8 +134,8 @@ def test_user_equations_that_numba_compiles_run_compiled(integrator, method):
     """A user's plain callables (the Cartesian pendulum, typed by hand) run in the compiled loop."""
     eom = PENDULUM
     q0, qd0 = np.array([1.0, 0.0]), np.array([0.0, 0.5])
-    kw = dict(t_end=2.0, integrator=integrator, method=method, rtol=RTOL, atol=ATOL,
-              step=1e-3 if integrator == "RK4" else None)
+    kw = dict(t_end=2.0, integrator=integrator, method=method,
+              **(dict(step=1e-3) if integrator == "RK4" else dict(rtol=RTOL, atol=ATOL)))
     fast, ref = simulate(eom, q0, qd0, backend="compiled", **kw), simulate(eom, q0, qd0, **kw)
     assert fast.meta["backend"] == "compiled" and fast.stats["nfev"] > 0
     if integrator == "RK4":

@@ -50,7 +50,7 @@ exclude = [{ method = "projection" }, { variant = "seed", method = "none" }]
 
 @pytest.mark.parametrize("group,message", [
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "matlab"', "engine = 'matlab'"),
-    ('name = "g"\nmechanism = "quick_return"\nt_end = -1.0', "t_end = -1.0 must be a number > 0"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = -1.0', "t_end = -1.0 must be finite and > 0"),
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweeps = {}', "unknown keys ['sweeps']"),
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweep = { omega = 3 }', "sweep.omega = 3 must be a non-empty list"),
     ('name = "g"\nt_end = 1.0', "'mechanism' and 't_end' are required"),
@@ -105,14 +105,14 @@ summary = "x"
 name = "g"
 mechanism = "quick_return"
 t_end = 0.05
-sweep = { method = ["none", "magic", "projection"] }
+sweep = { max_evaluations = [100000, 5, 200000] }
 """)
     cases = pl.load_case_list(path).cases
     store = pl.Store(tmp_path / "runs")
     out = pl.run_cases(cases, store, pl.InlineExecutor())
-    assert out.computed == 2 and list(out.failed) == ["demo/g [method=magic]"]
-    assert out.failed["demo/g [method=magic]"].startswith("ValueError: unknown stabilization method 'magic'")
-    bad = pl.find_one(cases, method="magic")
+    assert out.computed == 2 and list(out.failed) == ["demo/g [max_evaluations=5]"]
+    assert out.failed["demo/g [max_evaluations=5]"].startswith("RunBoundError: quick_return: 5 evaluations reached")
+    bad = pl.find_one(cases, max_evaluations=5)
     assert store.failure(bad)["error"] == out.failed[bad.name] and "Traceback" in store.failure(bad)["traceback"]
     with pytest.raises(LookupError, match="it failed"):
         store.load(bad)
@@ -132,25 +132,26 @@ summary = "x"
 name = "g"
 mechanism = "quick_return"
 t_end = 0.05
-expect_error = "ValueError"
-sweep = { method = ["none", "magic"] }
+expect_error = "RunBoundError"
+sweep = { max_evaluations = [100000, 5] }
 [[group]]
 name = "other"
 mechanism = "quick_return"
 t_end = 0.05
 expect_error = "SingularConfigurationError"
-sweep = { method = ["magic"] }
+sweep = { max_evaluations = [5] }
 """)
     cases = pl.load_case_list(path).cases
     store = pl.Store(tmp_path / "runs")
     out = pl.run_cases(cases, store, pl.InlineExecutor())
-    assert list(out.expected) == ["demo/g [method=magic]"]
-    assert out.expected["demo/g [method=magic]"].startswith("ValueError: unknown stabilization method 'magic'")
-    assert out.failed == {"demo/g [method=none]": "expected to stop with ValueError, but the run finished",
-                          "demo/other [method=magic]": out.failed["demo/other [method=magic]"]}
-    assert out.failed["demo/other [method=magic]"].startswith("ValueError")
+    assert list(out.expected) == ["demo/g [max_evaluations=5]"]
+    assert out.expected["demo/g [max_evaluations=5]"].startswith("RunBoundError: quick_return: 5 evaluations reached")
+    assert out.failed == {"demo/g [max_evaluations=100000]": "expected to stop with RunBoundError, but the run finished",
+                          "demo/other [max_evaluations=5]": out.failed["demo/other [max_evaluations=5]"]}
+    assert out.failed["demo/other [max_evaluations=5]"].startswith("RunBoundError")
     table = pl.failures_table([pl.load_case_list(path)], store).set_index("case")
-    assert table.loc["demo/g [method=magic]", "expected"] and not table.loc["demo/other [method=magic]", "expected"]
+    assert table.loc["demo/g [max_evaluations=5]", "expected"]
+    assert not table.loc["demo/other [max_evaluations=5]", "expected"]
 
 
 @pytest.mark.parametrize("value", ["", 3, "not a name"])
@@ -278,7 +279,8 @@ def test_skipped_summary_removes_its_stale_tables(tiny, tmp_path):
     quiet = open(os.devnull, "w")
     pl.run_pipeline(tmp_path / "r", tmp_path / "cache", workers=1, folder=tiny, stream=quiet)
     assert (tmp_path / "r" / "tables" / "sliding_mode_runs.csv").exists()
-    broken = (tiny / "sliding_mode.toml").read_text().replace('method = "projection"', 'method = "magic"')
+    broken = (tiny / "sliding_mode.toml").read_text().replace('method = "projection"',
+                                                              'method = "projection", max_evaluations = 5')
     (tiny / "sliding_mode.toml").write_text(broken)  # the reference now fails
     record = pl.run_pipeline(tmp_path / "r", tmp_path / "cache", workers=1, folder=tiny, stream=quiet)
     assert "failed" in record["studies"]["sliding_mode"]["summary_error"]
@@ -308,14 +310,14 @@ name = "g"
 mechanism = "quick_return"
 t_end = "@cross_validation:cut_horizon"
 options = { rtol = "@reference_rtol" }
-sweep = { atol = ["@reference_atol"], setting = [{ eps = "@cross_validation:friction_eps" }] }
+sweep = { atol = ["@reference_atol"], setting = [{ friction = "regularized", friction_eps = "@cross_validation:friction_eps" }] }
 """)
     from study.reference_data import tolerance
 
     (case,) = pl.load_case_list(path).cases
     assert case.t_end == tolerance("cut_horizon", table="cross_validation")
     assert case.kwargs == {"rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol"),
-                           "eps": tolerance("friction_eps", table="cross_validation")}
+                           "friction": "regularized", "friction_eps": tolerance("friction_eps", table="cross_validation")}
     _write(tmp_path, path.read_text().replace("@reference_rtol", "@no_such_entry"))
     with pytest.raises(pl.CaseListError, match="'@no_such_entry' names no reference entry"):
         pl.load_case_list(path)

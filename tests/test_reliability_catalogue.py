@@ -331,7 +331,7 @@ def rk4_step_over_a_switch(tmp):
     return lambda: simulate("quick_return", integrator="RK4", step=0.5, t_end=1.0)
 
 
-@entry("non-finite", "q = [nan  0.] must be finite", error=ValueError)
+@entry("non-finite", "q0 = [nan  0.] must be finite", error=ValueError)
 def nan_initial_state(tmp):
     return lambda: simulate(handwritten.cartesian_pendulum(), [np.nan, 0.0], PENDULUM_QD0, 0.1)
 
@@ -641,7 +641,7 @@ def cli_run_unreachable_scheduler(tmp):
                 "--scheduler", "tcp://127.0.0.1:9")
 
 
-@entry("command line", "run.toml", "t_end = -1.0 must be a number > 0", exit=2)
+@entry("command line", "run.toml", "t_end = -1.0 must be finite and > 0", exit=2)
 def cli_run_bad_case_list(tmp):
     (tmp / "cases").mkdir()
     (tmp / "cases" / "run.toml").write_text(ONE_CASE.replace("t_end = 0.1", "t_end = -1.0"))

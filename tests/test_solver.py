@@ -192,7 +192,7 @@ def test_result_round_trip(tmp_path):
     ({"rtol": 0.0}, "rtol = 0.0 must be finite and > 0"),
     ({"atol": -1.0}, "atol = -1.0 must be finite and > 0"),
     ({"t_end": 0.0}, "t_end = 0.0 must be finite and > 0"),
-    ({"integrator": "RK4"}, "give step="),
+    ({"integrator": "RK4"}, "RK4 is fixed-step: give step"),
     ({"integrator": "RK4", "step": -1e-3}, "step = -0.001 must be finite and > 0"),
     ({"acceleration_solver": "lu"}, "valid choices: multiplier, partitioned, orthonormal"),
     ({"method": "sliding_mode", "sgn": "sigmoid"}, "valid choices: sign, sat, tanh, arctan, sqrt"),

@@ -16,6 +16,8 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from study.errors import EquationsError
+
 Array = np.ndarray
 
 
@@ -145,19 +147,57 @@ class EquationsOfMotion:
         """T = 1/2 qd^T M(q) qd."""
         return 0.5 * float(qd @ self.mass(q) @ qd)
 
-    def check_shapes(self, q: Array, qd: Array, t: float = 0.0) -> None:
-        """Evaluate every callable once and raise a ValueError naming any with a wrong shape."""
+    def outputs(self) -> tuple[tuple[str, Callable[..., object], tuple[int, ...]], ...]:
+        """(name, callable, expected shape) of the callables a run evaluates; potential_energy (a scalar) if given."""
         m, r = self.n_coordinates, self.n_constraints
-        expected = {
-            "mass(q)": (self.mass(q), (m, m)),
-            "forces(t, q, qd)": (self.forces(t, q, qd), (m,)),
-            "phi(q)": (self.phi(q), (r,)),
-            "phi_q(q)": (self.phi_q(q), (r, m)),
-            "gamma(q, qd)": (self.gamma(q, qd), (r,)),
-        }
-        bad = [f"{k} has shape {np.shape(v)}, expected {s}" for k, (v, s) in expected.items() if np.shape(v) != s]
+        calls = (("mass", self.mass, (m, m)), ("forces", self.forces, (m,)), ("phi", self.phi, (r,)),
+                 ("phi_q", self.phi_q, (r, m)), ("gamma", self.gamma, (r,)))
+        return calls + ((("potential_energy", self.potential_energy, ()),) if self.potential_energy else ())
+
+    def check_shapes(self, q: Array, qd: Array, t: float = 0.0) -> None:
+        """Evaluate every callable once at the initial state (t0, q0, qd0) = (t, q, qd) and raise an
+        :class:`study.errors.EquationsError` (a ValueError) naming each one that raises, returns something
+        other than real numbers (None, text, complex values) or has the wrong shape."""
+        args = {"mass": "(q0)", "forces": "(t0, q0, qd0)", "phi": "(q0)", "phi_q": "(q0)", "gamma": "(q0, qd0)",
+                "potential_energy": "(q0)"}
+        bad = []
+        for name, f, shape in self.outputs():
+            label = name + args[name]
+            try:
+                value = f(t, q, qd) if name == "forces" else f(q, qd) if name == "gamma" else f(q)
+            except Exception as exc:  # noqa: BLE001 - reported as a problem of the user's callable
+                bad.append(f"{label} raised {type(exc).__name__}: {' '.join(str(exc).split())}")
+                continue
+            problem = output_problem(value, shape)
+            if problem:
+                bad.append(f"{label} {problem}")
         if bad:
-            raise ValueError(f"EquationsOfMotion {self.name!r}: " + "; ".join(bad))
+            raise EquationsError(f"EquationsOfMotion {self.name!r}: " + "; ".join(bad), tuple(bad))
+
+
+def _show(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def output_problem(value: object, shape: tuple[int, ...]) -> str | None:
+    """What is wrong with a callable's returned ``value`` for the ``shape`` it must have (``()``: a scalar), as
+    the end of a sentence starting with the callable's name; None if it is a real array of that shape.
+    Complex values are reported (with 'complex' in the sentence) even with a zero imaginary part: the
+    solver would drop the imaginary part silently."""
+    expected = "a scalar" if shape == () else f"{shape}"
+    try:
+        array = np.asarray(value)
+    except Exception:  # noqa: BLE001 - e.g. a ragged sequence
+        return f"returned {_show(value)}, not an array of shape {expected}"
+    if array.dtype.kind == "c":
+        return f"returned complex values {_show(value)}: the equations must be real"
+    if array.dtype.kind not in "biuf":
+        kind = "" if value is None else f" (a {type(value).__name__})"
+        return f"returned {_show(value)}{kind}, expected real numbers of shape {expected}"
+    if array.shape != shape:
+        return f"has shape {array.shape}, expected {expected}"
+    return None
 
 
 def as_state(q: Sequence[float], qd: Sequence[float], m: int) -> tuple[Array, Array]:

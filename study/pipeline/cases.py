@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from study import arguments
 from study.params import REFERENCE_DIR
 from study.pipeline.keys import code_version, parameter_hash
 from study.reference_data import tolerance
@@ -210,23 +211,110 @@ def _check_exclude(g: Mapping, where: str) -> None:
                                 f"of the group sets (a misspelling would exclude nothing)")
 
 
-def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
+def _check_group(g: Mapping, where: str) -> None:
+    """The group's fields have their types (a table where a table is expected, text where text is), its sweep
+    lists are non-empty without repeats, and the number of cases it expands to is within ``max_cases``."""
     unknown = set(g) - _GROUP_KEYS
     if unknown:
         raise CaseListError(f"{where}: unknown keys {sorted(unknown)}; valid: {sorted(_GROUP_KEYS)}")
+    for key in ("options", "sweep"):
+        if not isinstance(g.get(key, {}), Mapping):
+            raise CaseListError(f"{where}: {key} = {g[key]!r} must be a table")
+    exclude = g.get("exclude", [])
+    if not isinstance(exclude, list) or not all(isinstance(rule, Mapping) for rule in exclude):
+        raise CaseListError(f"{where}: exclude = {exclude!r} must be a list of tables (option = value)")
+    for key in ("mechanism", "variant", "engine"):
+        if key in g and not (isinstance(g[key], str) and g[key]):
+            raise CaseListError(f"{where}: {key} = {g[key]!r} must be non-empty text")
+    size = 1
+    for k, values in g.get("sweep", {}).items():
+        if not isinstance(values, list) or not values:
+            raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
+        repeated = [v for i, v in enumerate(values) if v in values[:i]]
+        if repeated:
+            raise CaseListError(f"{where}: sweep.{k} lists {repeated[0]!r} twice (the same case twice)")
+        size *= len(values)
+    limit = tolerance("max_cases")
+    if size > limit:
+        raise CaseListError(f"{where}: the sweep expands to {size:g} cases, above max_cases = {limit:g} "
+                            f"(reference/tolerances.toml): split the list or raise the bound")
+
+
+def _check_case(case: Case, where: str) -> None:
+    """A case's mechanism and variant exist and its options are arguments of its engine, of their types."""
+    from study.params import available_mechanisms, available_variants
+
+    known = available_mechanisms()
+    if case.mechanism not in known:
+        raise CaseListError(f"{where}: mechanism = {case.mechanism!r} is not known; valid choices: {', '.join(known)}")
+    variants = available_variants(case.mechanism)
+    if case.variant not in variants:
+        raise CaseListError(f"{where}: variant = {case.variant!r} is not a variant of {case.mechanism}; valid "
+                            f"choices: {', '.join(variants)}")
+    options = case.kwargs
+    try:
+        arguments.number("repeat", options.pop("repeat", 1), whole=True)
+        if case.engine == "exudyn":
+            _check_exudyn_options(options)
+        else:
+            _check_inhouse_options(options, case.t_end)
+    except ValueError as exc:
+        raise CaseListError(f"{where}: {exc}") from None
+
+
+def _check_inhouse_options(options: dict, t_end: float) -> None:
+    import inspect
+
+    from study.simulate import check_arguments, simulate
+    from study.solver.stabilization import make_stabilization
+
+    arguments.choice("initial", options.pop("initial", "consistent"), ("consistent", "printed"))
+    arguments.number("perturb_ulps", options.pop("perturb_ulps", 0), positive=False, whole=True)
+    for key in ("q0", "qd0"):   # a user's state: its length is checked against the equations when the case runs
+        if key in options:
+            value = options.pop(key)
+            arguments.state(key, value, len(value) if isinstance(value, list) else -1)
+    run = {k: p.default for k, p in inspect.signature(simulate).parameters.items() if p.kind == p.KEYWORD_ONLY}
+    checked = set(inspect.signature(check_arguments).parameters) - {"names"}
+    given = {k: options.pop(k) for k in list(options) if k in run}
+    run.update(given, t_end=t_end)
+    given = check_arguments(**{k: v for k, v in run.items() if k in checked})
+    make_stabilization(run["method"], **options)
+    samples = given["t_end"] / given["output_step"]   # the time column alone: a lower bound of the output
+    if samples * tolerance("output_bytes_per_value") > tolerance("max_output_bytes"):
+        raise ValueError(f"t_end = {t_end:g} s at output_step = {given['output_step']:g} s asks for {samples:.3g} "
+                         f"samples, more output than max_output_bytes = {tolerance('max_output_bytes'):g} bytes allows")
+
+
+def _check_exudyn_options(options: dict) -> None:
+    from study.exudyn_models.settings import CONFIGURATIONS, FRICTION_MODES, SOLVERS
+
+    unknown = sorted(set(options) - {"h", "solver", "output_step", "friction", "eps", "configuration", "ignore_singular"})
+    if unknown:
+        raise ValueError(f"{', '.join(unknown)}: not an option of an Exudyn case; valid options: h, solver, "
+                         f"output_step, friction, eps, configuration, ignore_singular")
+    arguments.number("h", options.get("h"))
+    arguments.number("output_step", options.get("output_step"), optional=True)
+    arguments.number("eps", options.get("eps"), optional=True)
+    arguments.choice("solver", options.get("solver", "index3"), SOLVERS)
+    arguments.choice("friction", options.get("friction", "regularized"), FRICTION_MODES)
+    arguments.choice("configuration", options.get("configuration", "python"), CONFIGURATIONS)
+    arguments.flag("ignore_singular", options.get("ignore_singular", False))
+
+
+def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
+    _check_group(g, where)
     fields = {"mechanism": g.get("mechanism"), "variant": g.get("variant", "seed"),
               "t_end": _resolve(g.get("t_end"), where)}
     engine = g.get("engine", "inhouse")
     if engine not in ENGINES:
         raise CaseListError(f"{where}: engine = {engine!r} is not one of {ENGINES}")
     sweep = g.get("sweep", {})
-    for k, values in sweep.items():
-        if not isinstance(values, list) or not values:
-            raise CaseListError(f"{where}: sweep.{k} = {values!r} must be a non-empty list")
     _check_exclude(g, where)
     expect = g.get("expect_error", "")
-    if not isinstance(expect, str) or (expect and not expect.isidentifier()):
-        raise CaseListError(f"{where}: expect_error = {expect!r} must name an error class (e.g. 'SolverError')")
+    if expect != "" and not _is_error_name(expect):
+        raise CaseListError(f"{where}: expect_error = {expect!r} must name an error class a run can stop with: "
+                            f"{', '.join(sorted(_error_names()))} or a built-in exception")
     backend = g.get("backend")
     if backend is not None and (engine != "inhouse" or backend not in BACKENDS):
         raise CaseListError(f"{where}: backend = {backend!r} must be one of {BACKENDS}, for engine 'inhouse' only")
@@ -247,14 +335,36 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
         if backend is not None:   # a sweep entry's own backend option (e.g. an integrator only the
             options.setdefault("backend", backend)   # reference path has) is stated there and wins
-        t_end = case_fields["t_end"]
-        if not isinstance(t_end, (int, float)) or not t_end > 0:
-            raise CaseListError(f"{where}: t_end = {t_end!r} must be a number > 0 [s]")
+        try:
+            t_end = arguments.number("t_end", case_fields["t_end"])
+        except ValueError as exc:
+            raise CaseListError(f"{where}: {exc} [s]") from None
         if engine == "exudyn" and "h" not in options:
             raise CaseListError(f"{where}: an Exudyn case needs the step 'h' [s] in its options or sweep")
-        cases.append(Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"],
-                          float(t_end), tuple(sorted(options.items())), tuple(labels), expect))
+        case = Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"], float(t_end),
+                    tuple(sorted(options.items())), tuple(labels), expect)
+        _check_case(case, where)
+        cases.append(case)
+    if not cases:
+        raise CaseListError(f"{where}: exclude removes every case of the group")
     return cases
+
+
+def _error_names() -> set[str]:
+    """The error classes a case may be expected to stop with: the study's own and Exudyn's SolverError."""
+    from study import errors
+    from study.solver.friction import FrictionLawError, PainleveError
+    from study.solver.initial import InitialConditionError
+
+    own = {n for n, v in vars(errors).items() if isinstance(v, type) and issubclass(v, Exception)}
+    return own | {c.__name__ for c in (FrictionLawError, PainleveError, InitialConditionError)} | {"SolverError"}
+
+
+def _is_error_name(name) -> bool:
+    import builtins
+
+    builtin = getattr(builtins, name, None) if isinstance(name, str) else None
+    return name in _error_names() or (isinstance(builtin, type) and issubclass(builtin, BaseException))
 
 
 def _samples(g: Mapping, cases: list[Case], where: str) -> list[tuple[Case, Case]]:
@@ -290,18 +400,30 @@ def sample_horizon(case: Case) -> float:
 def load_case_list(path: Path) -> CaseList:
     """Parse and expand one case list (CaseListError names the file and group of any problem)."""
     path = Path(path)
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise CaseListError(f"{path}: not valid TOML: {exc}") from None
     study = path.stem
     head = data.get("study", {})
-    if "summary" not in head:
+    if not isinstance(head, Mapping) or "summary" not in head:
         raise CaseListError(f"{path}: [study] needs 'summary' (the module with summarize())")
+    for key in ("summary", "description"):
+        if key in head and not (isinstance(head[key], str) and (head[key].strip() or key == "description")):
+            raise CaseListError(f"{path}: [study] {key} = {head[key]!r} must be text")
     groups = data.get("group", [])
+    if not isinstance(groups, list) or not all(isinstance(g, Mapping) for g in groups):
+        raise CaseListError(f"{path}: group = {groups!r} must be an array of tables ([[group]] entries)")
     if not groups:
         raise CaseListError(f"{path}: no [[group]] entries")
     names = [g.get("name") for g in groups]
-    if None in names or len(set(names)) != len(names):
-        raise CaseListError(f"{path}: every group needs a unique 'name'; got {names}")
+    for name in names:
+        if not (isinstance(name, str) and name.strip()):
+            raise CaseListError(f"{path}: group name = {name!r} must be non-empty text (every group needs a name)")
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise CaseListError(f"{path}: group names must be unique; {', '.join(map(repr, repeated))} is used more than once")
     cases, samples = [], []
     for g in groups:
         where = f"{path.name} group {g['name']!r}"

@@ -15,6 +15,13 @@ from study.pipeline.cases import Case
 from study.results import SimulationResult
 
 
+def _stat(path: Path):
+    try:
+        return path.stat()
+    except FileNotFoundError:
+        return None
+
+
 class MissingResult(LookupError):
     """A case has no saved result (not run yet, or it failed)."""
 
@@ -47,8 +54,8 @@ class Store:
         json_path = self.file(case, ".json")
         if not json_path.exists():  # the JSON is written last
             return "not saved"
-        stamp = (json_path.stat().st_mtime_ns, self.file(case, ".csv").stat().st_mtime_ns
-                 if self.file(case, ".csv").exists() else None)
+        stamp = tuple((s.st_mtime_ns, s.st_size, s.st_ino) if (s := _stat(p)) else None
+                      for p in (json_path, self.file(case, ".csv")))
         cached = self._verified.get(case.key())
         if cached is not None and cached[0] == stamp:
             return cached[1]
@@ -72,7 +79,11 @@ class Store:
             raise MissingResult(f"no saved result for case {case.name} ({why})")
         if why is not None:
             raise CorruptResult(f"the saved result of case {case.name} is not used: {why}")
-        return SimulationResult.load(self.base(case), verify=False)  # just verified
+        try:
+            return SimulationResult.load(self.base(case), verify=False)  # just verified
+        except ResultIntegrityError as exc:  # replaced or removed since it was verified
+            self._verified.pop(case.key(), None)
+            raise CorruptResult(f"the saved result of case {case.name} is not used: {exc}") from None
 
     def discard(self, case: Case) -> None:
         """Remove a saved result that failed its check (so it can never be read)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 from typing import Any, Mapping
@@ -35,24 +36,49 @@ def table_entry(path: Path) -> dict[str, Any]:
     return {"rows": data_rows(text), "sha256": sha256_text(text)}
 
 
-def table_record(written: Path) -> dict[str, Any]:
-    """The tables a study wrote last time, {path: {rows, sha256}} (older records: a list of paths)."""
+def table_record(written: Path, strict: bool = False) -> dict[str, Any]:
+    """The tables a study wrote last time, {path: {rows, sha256}} (older records: a list of paths).
+
+    A missing record is empty. An unreadable one (not valid JSON, not a list or object) is empty too,
+    or, with ``strict``, a ResultIntegrityError naming the record file: the tables it lists cannot be
+    checked against it.
+    """
+    written = Path(written)
     if not written.exists():
         return {}
     try:
         data = json.loads(written.read_text())
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        if strict:
+            raise ResultIntegrityError(f"{written}: pipeline record of tables is not valid JSON ({exc}); "
+                                       f"the tables it lists cannot be checked") from None
         return {}
-    return {p: {} for p in data} if isinstance(data, list) else data
+    if isinstance(data, list) and all(isinstance(p, str) for p in data):
+        return {p: {} for p in data}
+    if isinstance(data, dict):
+        return data
+    if strict:
+        raise ResultIntegrityError(f"{written}: not a pipeline record of tables (a JSON {type(data).__name__}, "
+                                   f"not an object); the tables it lists cannot be checked")
+    return {}
 
 
 def read_table(path: Path, record_root: Path) -> pd.DataFrame:
     """A table written by :func:`run_pipeline`, after checking it against the rows and checksum recorded
-    when it was written (ResultIntegrityError otherwise: a table edited, cut or left over from another run)."""
+    when it was written (ResultIntegrityError otherwise: a table edited, cut or left over from another run,
+    or a record that cannot be read)."""
     path = Path(path).resolve()
     for written in sorted((Path(record_root) / "tables").glob("*.json")):
-        entry = table_record(written).get(str(path))
+        entry = table_record(written, strict=True).get(str(path))
         if entry is not None:
-            verify_text(path, path.read_text(), entry.get("rows"), entry.get("sha256"))
-            return pd.read_csv(path)
+            if not isinstance(entry, dict):
+                entry = {}
+            if not path.exists():
+                raise ResultIntegrityError(f"{path}: missing (listed in the pipeline record {written})")
+            text = path.read_text()
+            verify_text(path, text, entry.get("rows"), entry.get("sha256"))
+            try:
+                return pd.read_csv(io.StringIO(text))
+            except pd.errors.EmptyDataError:  # a table without columns (an empty summary), as written
+                return pd.DataFrame()
     raise ResultIntegrityError(f"{path}: no pipeline record lists this table (not written by the last run)")

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from study.errors import SimulationError
 from study.results import SimulationResult
-from study.solver.dynamics import Dynamics
+from study.solver.checks import diagnose_dynamics
+from study.solver.dynamics import Dynamics, output_error
 from study.solver.friction import FrictionDynamics
 
 
@@ -13,7 +15,9 @@ def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) ->
     """Post-process samples: accelerations, multipliers, residuals and energies at every sample.
 
     With friction (a FrictionDynamics) also the contacts' normal and tangential forces, stick flags
-    and the work of each contact's tangential force.
+    and the work of each contact's tangential force. A user's callable that raises here, or returns what
+    cannot be stored (a wrong shape, complex values; potential_energy: a real scalar), fails the run with
+    its name and the sample's time (``study.solver.checks.diagnose_equations``).
     """
     eom = dyn.eom
     m, r = eom.n_coordinates, eom.n_constraints
@@ -26,16 +30,28 @@ def assemble_result(dyn: Dynamics, t: np.ndarray, y: np.ndarray, modes: list) ->
     normal, tangential, stick = np.zeros((n, nc)), np.zeros((n, nc)), np.zeros((n, nc))
     for k in range(n):
         q, qd = y[k, :m], y[k, m:2 * m]
-        if with_friction:
-            sol = dyn.contact_solution(t[k], q, qd, modes[k])
-            qdd[k], lam[k] = sol.qdd, sol.lam
-            normal[k], tangential[k], stick[k] = sol.normal, sol.friction, dyn.stick_flags(sol)
-        else:
-            qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
-        phi[k] = eom.phi(q)
-        phidot[k] = eom.phi_q(q) @ qd
-        kinetic[k] = eom.kinetic_energy(q, qd)
-        potential[k] = eom.potential_energy(q) if eom.potential_energy else 0.0
+        try:
+            if with_friction:
+                sol = dyn.contact_solution(t[k], q, qd, modes[k])
+                qdd[k], lam[k] = sol.qdd, sol.lam
+                normal[k], tangential[k], stick[k] = sol.normal, sol.friction, dyn.stick_flags(sol)
+            else:
+                qdd[k], lam[k] = dyn.evaluate(t[k], q, qd, modes[k])
+            phi[k] = eom.phi(q)
+            phidot[k] = eom.phi_q(q) @ qd
+            kinetic[k] = eom.kinetic_energy(q, qd)
+            if eom.potential_energy:
+                value = eom.potential_energy(q)
+                if np.iscomplexobj(value):  # storing it would drop the imaginary part without a word
+                    raise output_error(eom, "potential_energy(q)", value, (), float(t[k]), q)
+                potential[k] = value
+        except SimulationError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a user's callable raised, or returned what cannot be stored
+            error = diagnose_dynamics(dyn, float(t[k]), q, qd, modes[k], potential=True)
+            if error is None:
+                raise
+            raise error from exc
     energies = {"kinetic": kinetic, "potential": potential}
     for i, name in enumerate(dyn.work_names):
         energies[f"work_{name}"] = y[:, 2 * m + i]

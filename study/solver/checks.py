@@ -2,7 +2,7 @@
 
 Before a run (:func:`validate_equations`, once, skipped with ``simulate(..., check=False)``):
 
-1. every callable returns finite values at (q0, qd0);
+1. every callable returns finite real values of its shape at (q0, qd0) (potential_energy, if given, a scalar);
 2. M(q0) is symmetric and positive-definite (Cholesky);
 3. phi_q(q0) equals the central-difference Jacobian of phi;
 4. gamma(q0, qd) equals its definition -(Phi_q qd)_q qd, by a central difference of phi_q along qd
@@ -29,10 +29,13 @@ from typing import Callable
 
 import numpy as np
 
-from study.errors import EquationsError, NonFiniteError, RunBoundError, SingularConfigurationError
-from study.model.eom import EquationsOfMotion
+from study.errors import (EquationsError, NonFiniteError, RunBoundError, SimulationError, SingularConfigurationError,
+                          UserFunctionError)
+from study.model.eom import EquationsOfMotion, output_problem
 from study.reference_data import tolerance
-from study.solver.friction import PainleveError
+from study.solver.budget import Budget
+from study.solver.dynamics import output_error, raised_error
+from study.solver.friction import FrictionDynamics, PainleveError
 
 Array = np.ndarray
 
@@ -98,6 +101,18 @@ class SingularityMonitor:
     def measure(self, q: Array) -> float:
         return singularity_measure(np.asarray(self.eom.phi_q(q), dtype=float), self.scale)
 
+    def _jacobian(self, t: float, q: Array) -> Array:
+        """Phi_q(q) at an accepted step, where an implicit integrator may not have evaluated the equations yet:
+        a phi_q that raises, or returns complex values or a wrong shape, fails the run with its name and t."""
+        try:
+            J = self.eom.phi_q(q)
+        except Exception as exc:  # noqa: BLE001 - the user's callable raised
+            raise raised_error(self.eom, "phi_q(q)", exc, t, q) from exc
+        error = output_error(self.eom, "phi_q(q)", J, (self.eom.n_constraints, len(q)), t, q)
+        if error is not None:
+            raise error
+        return np.asarray(J, dtype=float)
+
     def rank(self, J: Array) -> int:
         """Numerical rank of Phi_q: singular values at or above ``singular_ratio`` times the scale."""
         s = singular_values(J)
@@ -114,7 +129,7 @@ class SingularityMonitor:
         once) turns the determinant over twice and leaves it positive."""
         if self.eom.n_constraints == 0:
             return
-        J = np.asarray(self.eom.phi_q(q), dtype=float)
+        J = self._jacobian(t, q)
         rho = singularity_measure(J, self.scale)
         self.smallest = min(self.smallest, rho)
         reversed_ = 0
@@ -141,12 +156,18 @@ def _fmt(x) -> str:
     return "[" + ", ".join(f"{v:.6g}" for v in np.asarray(x, dtype=float).ravel()) + "]"
 
 
-def _evaluate(name: str, call: Callable[[], Array], problems: list[str]) -> Array | None:
+def _evaluate(name: str, call: Callable[[], Array], problems: list[str],
+              shape: tuple[int, ...] | None = None) -> Array | None:
     try:
-        value = np.asarray(call(), dtype=float)
+        raw = call()
     except Exception as exc:  # noqa: BLE001 - reported as a problem of the user's callable
         problems.append(f"{name} raised {type(exc).__name__}: {exc}")
         return None
+    problem = output_problem(raw, np.shape(raw) if shape is None else shape)  # complex, None, text, shape
+    if problem:
+        problems.append(f"{name} {problem}")
+        return None
+    value = np.asarray(raw, dtype=float)
     if not np.all(np.isfinite(value)):
         problems.append(f"{name} is not finite at the initial state: {_fmt(value)}")
         return None
@@ -167,11 +188,14 @@ def validate_equations(eom: EquationsOfMotion, q0: Array, qd0: Array, t0: float 
     if not (np.all(np.isfinite(q0)) and np.all(np.isfinite(qd0))):
         problems.append(f"the initial state is not finite: q0 = {_fmt(q0)}, qd0 = {_fmt(qd0)}")
         raise EquationsError(_message(eom, problems), tuple(problems))
-    M = _evaluate("mass(q0)", lambda: eom.mass(q0), problems)
-    _evaluate("forces(0, q0, qd0)", lambda: eom.forces(t0, q0, qd0), problems)
-    phi = _evaluate("phi(q0)", lambda: eom.phi(q0), problems)
-    J = _evaluate("phi_q(q0)", lambda: eom.phi_q(q0), problems)
-    gamma = _evaluate("gamma(q0, qd0)", lambda: eom.gamma(q0, qd0), problems)
+    m, r = eom.n_coordinates, eom.n_constraints
+    M = _evaluate("mass(q0)", lambda: eom.mass(q0), problems, (m, m))
+    _evaluate("forces(0, q0, qd0)", lambda: eom.forces(t0, q0, qd0), problems, (m,))
+    phi = _evaluate("phi(q0)", lambda: eom.phi(q0), problems, (r,))
+    J = _evaluate("phi_q(q0)", lambda: eom.phi_q(q0), problems, (r, m))
+    gamma = _evaluate("gamma(q0, qd0)", lambda: eom.gamma(q0, qd0), problems, (r,))
+    if eom.potential_energy is not None:
+        _evaluate("potential_energy(q0)", lambda: eom.potential_energy(q0), problems, ())
 
     if M is not None:
         sym = tolerance("mass_symmetry")
@@ -233,10 +257,59 @@ def _message(eom: EquationsOfMotion, problems: list[str]) -> str:
     return f"EquationsOfMotion {eom.name!r} failed {len(problems)} check(s) before the run: " + "; ".join(problems)
 
 
+# --- a user's callables failing during a run -------------------------------------------------------
+def diagnose_equations(eom: EquationsOfMotion, t: float, q: Array, qd: Array, mode=None, *, applied: bool = False,
+                       contacts: bool = False, potential: bool = False) -> SimulationError | None:
+    """The run failure of the first of a user's callables that raises, or returns something other than real
+    numbers of its shape (complex values included), at (t, q, qd); None if every one is fine.
+
+    Made only once an evaluation went wrong (an exception, a complex output): it evaluates the callables again,
+    one by one, so that the failure names the callable rather than the solver's symptom of it. ``mode`` is the
+    loads' mode; ``applied``, ``contacts`` and ``potential`` add applied_forces, the contacts' tangent
+    functions and potential_energy. The caller chains the original exception (``raise error from exc``).
+    """
+    m, r = eom.n_coordinates, eom.n_constraints
+    modal = eom.indicators is not None and mode is not None
+    calls: list[tuple[str, Callable[[], object], tuple[int, ...] | None]] = [
+        ("forces(t, q, qd)", lambda: eom.forces(t, q, qd, mode=mode) if modal else eom.forces(t, q, qd), (m,)),
+        ("mass(q)", lambda: eom.mass(q), (m, m)), ("phi(q)", lambda: eom.phi(q), (r,)),
+        ("phi_q(q)", lambda: eom.phi_q(q), (r, m)), ("gamma(q, qd)", lambda: eom.gamma(q, qd), (r,))]
+    if applied:
+        calls.append(("applied_forces(t, q, qd)", lambda: eom.applied_forces(t, q, qd, mode=mode) if modal else
+                      eom.applied_forces(t, q, qd), None))
+    if contacts:
+        for ct in eom.contacts:  # their shapes are the friction code's business: only raising and complex here
+            calls += [(f"contact {ct.name!r} tangent_jacobian(q)", lambda ct=ct: ct.tangent_jacobian(q), None),
+                      (f"contact {ct.name!r} tangent_bias(q, qd)", lambda ct=ct: ct.tangent_bias(q, qd), None)]
+    if potential and eom.potential_energy is not None:
+        calls.append(("potential_energy(q)", lambda: eom.potential_energy(q), ()))
+    for label, call, shape in calls:
+        with_qd = "qd" in label
+        try:
+            value = call()
+        except Exception as exc:  # noqa: BLE001 - the user's callable raised: that is the diagnosis
+            return raised_error(eom, label, exc, t, q, qd if with_qd else None)
+        if label.startswith("applied_forces"):
+            if not hasattr(value, "items"):
+                return UserFunctionError(f"{eom.name}: {label} returned {value!r:.80}, expected a mapping of load "
+                                         f"names to arrays of shape ({m},) (at t = {t:.9g} s, q = {_fmt(q)}, "
+                                         f"qd = {_fmt(qd)})", t=float(t), quantity="applied_forces")
+            for key, v in value.items():
+                error = output_error(eom, f"{label}[{key!r}]", v, (m,), t, q, qd)
+                if error is not None:
+                    return error
+            continue
+        error = output_error(eom, label, value, np.shape(value) if shape is None else shape, t, q,
+                             qd if with_qd else None)
+        if error is not None:
+            return error
+    return None
+
+
 # --- non-finite values during a run ----------------------------------------------------------------
 def diagnose_non_finite(eom: EquationsOfMotion, t: float, q: Array, qd: Array, result: Array, mode=None,
-                        monitor: SingularityMonitor | None = None, fixed_step: float | None = None) -> NonFiniteError:
-    """Name the first non-finite quantity of an evaluation at (t, q, qd) and its likely cause."""
+                        monitor: SingularityMonitor | None = None, fixed_step: float | None = None) -> SimulationError:
+    """Name the first non-finite (or complex) quantity of an evaluation at (t, q, qd) and its likely cause."""
     where = f"{eom.name}: non-finite value at t = {t:.9g} s"
     step_hint = (f"the step h = {fixed_step:g} s is likely too large (the integration diverged): use a smaller step "
                  f"or an adaptive integrator" if fixed_step else
@@ -244,6 +317,9 @@ def diagnose_non_finite(eom: EquationsOfMotion, t: float, q: Array, qd: Array, r
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
         return NonFiniteError(f"{where} in the state (q = {_fmt(q)}, qd = {_fmt(qd)}): {step_hint}", t=t,
                               quantity="state")
+    error = diagnose_equations(eom, t, q, qd, mode)  # a callable that raises, or returns complex values
+    if error is not None:
+        return error
     modal = eom.indicators is not None and mode is not None
     calls = (("forces(t, q, qd)", lambda: eom.forces(t, q, qd, mode=mode) if modal else eom.forces(t, q, qd)),
              ("mass(q)", lambda: eom.mass(q)), ("phi(q)", lambda: eom.phi(q)), ("phi_q(q)", lambda: eom.phi_q(q)),
@@ -257,24 +333,41 @@ def diagnose_non_finite(eom: EquationsOfMotion, t: float, q: Array, qd: Array, r
                      f"{name.split('(')[0]} itself returns non-finite values there (check that callable)")
             return NonFiniteError(f"{where}: {name} = {_fmt(value)} at q = {_fmt(q)}, qd = {_fmt(qd)}; {cause}",
                                   t=t, quantity=name.split("(")[0])
+    if np.iscomplexobj(result):
+        return NonFiniteError(f"{eom.name}: complex values at t = {t:.9g} s in the right-hand side, from equations "
+                              f"whose callables return real values at q = {_fmt(q)}, qd = {_fmt(qd)}: "
+                              f"{np.asarray(result)!r}"[:2000], t=t, quantity="rhs")
     rho = monitor.measure(q) if monitor is not None else float("nan")
     return NonFiniteError(f"{where} in the accelerations (qdd, lambda) from finite equations at q = {_fmt(q)}: "
                           f"the acceleration system is singular there (sigma_min(Phi_q) / scale = {rho:.3g}) or "
                           f"overflowed: {_fmt(result)}", t=t, quantity="qdd")
 
 
+def diagnose_dynamics(dyn, t: float, q: Array, qd: Array, mode=None, potential: bool = False) -> SimulationError | None:
+    """:func:`diagnose_equations` for the callables a Dynamics (or FrictionDynamics) evaluates in ``mode``."""
+    friction = isinstance(dyn, FrictionDynamics)
+    return diagnose_equations(dyn.eom, t, q, qd, dyn.load_mode(mode) if friction else mode,
+                              applied=bool(dyn.work_names), contacts=friction, potential=potential)
+
+
 class RunGuard:
     """The right-hand side of a run with its checks: finite output, an evaluation bound, singular systems.
 
-    Wraps ``dyn.rhs`` (a :class:`study.solver.dynamics.Dynamics`). Every call costs one
-    ``np.isfinite(...).all()`` on the output; the diagnosis (which quantity, why) is made only once
-    something is non-finite.
+    Wraps ``dyn.rhs`` (a :class:`study.solver.dynamics.Dynamics`). Every call costs one dtype test and one
+    ``np.isfinite(...).all()`` on the output; the diagnosis (which quantity, why) is made only once something
+    is non-finite or complex, or an exception came out of the evaluation: an exception raised by (or caused
+    by the output of) a user's callable becomes a :class:`study.errors.UserFunctionError` naming the callable
+    and the time, complex values a NonFiniteError (see :func:`diagnose_equations`); an exception no callable
+    explains is raised as it is. (Dynamics itself checks M(q) positive-definite and Phi_q real.)
     """
 
     def __init__(self, dyn, monitor: SingularityMonitor | None, max_evaluations: float,
-                 fixed_step: float | None = None):
+                 fixed_step: float | None = None, t_end: float | None = None):
         self.dyn, self.monitor = dyn, monitor
         self.max_evaluations, self.fixed_step = max_evaluations, fixed_step
+        # an adaptive run's pace (a fixed-step run's cost is known, and refused, before it starts)
+        self.budget = (Budget(t_end, max_evaluations) if t_end is not None and fixed_step is None
+                       and max_evaluations >= tolerance("budget_min_evaluations") else None)
 
     def __call__(self, t: float, y: Array, mode=None) -> Array:
         dyn = self.dyn
@@ -282,11 +375,16 @@ class RunGuard:
             raise RunBoundError(
                 f"{dyn.eom.name}: {dyn.nfev} evaluations reached max_evaluations = {self.max_evaluations:g} at "
                 f"t = {t:.9g} s (a stalled or far too long run; max_evaluations= raises the bound)"
-                + self._pose_note(y), t=float(t), quantity="evaluations")
+                + self._pose_note(y) + self._law_note(), t=float(t), quantity="evaluations")
+        if self.budget is not None:
+            self.budget.update(dyn.nfev, t, dyn.eom.name, self._law_note())
         try:
             out = dyn.rhs(t, y, mode)
         except np.linalg.LinAlgError as exc:
             q = y[:dyn.m]
+            error = self._diagnose(t, y, mode)  # a wrong shape can make a solve fail too
+            if error is not None:
+                raise error from exc
             raise SingularConfigurationError(
                 f"{dyn.eom.name}: the acceleration system is singular at t = {t:.9g} s, q = {_fmt(q)} ({exc})"
                 + self._pose_note(y), t=float(t), quantity="qdd", pose=list(map(float, q))) from exc
@@ -296,16 +394,41 @@ class RunGuard:
             if self.monitor is not None and self.monitor.measure(y[:dyn.m]) < self.monitor.ratio:
                 self.monitor.check(t, y[:dyn.m])
             raise
-        if not np.isfinite(out).all():
+        except SimulationError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a user's callable raised, or returned what the solver cannot use
+            error = self._diagnose(t, y, mode)
+            if error is None:
+                raise
+            raise error from exc
+        if out.dtype.kind != "f" or not np.isfinite(out).all():
             m = dyn.m
-            raise diagnose_non_finite(dyn.eom, t, y[:m], y[m:2 * m], out, mode, self.monitor, self.fixed_step)
+            error = self._diagnose(t, y, mode) if out.dtype.kind == "c" else None  # applied loads, contacts too
+            if error is not None:
+                raise error
+            raise diagnose_non_finite(dyn.eom, t, y[:m], y[m:2 * m], out, self._load_mode(mode), self.monitor,
+                                      self.fixed_step)
         return out
+
+    def _load_mode(self, mode):
+        return self.dyn.load_mode(mode) if isinstance(self.dyn, FrictionDynamics) else mode
+
+    def _diagnose(self, t: float, y: Array, mode) -> SimulationError | None:
+        return diagnose_dynamics(self.dyn, t, y[:self.dyn.m], y[self.dyn.m:2 * self.dyn.m], mode)
 
     def _pose_note(self, y: Array) -> str:
         if self.monitor is None or self.dyn.eom.n_constraints == 0:
             return ""
         return f"; at q = {_fmt(y[:self.dyn.m])} sigma_min(Phi_q) / scale = {self.monitor.measure(y[:self.dyn.m]):.3g}"
 
+    def _law_note(self) -> str:
+        """Why a plain-sgn friction run under an adaptive integrator stalls, when it is one."""
+        law = getattr(self.dyn, "law", None)
+        if law is None or law.name != "sign" or self.fixed_step is not None:
+            return ""
+        return ("; friction 'sign' (plain sgn) chatters at stick under an adaptive integrator, which shrinks its "
+                "step at every sign change: use integrator RK4 with a fixed step (paper 000's way) or friction 'exact'")
+
     def describe(self, t: float, y: Array) -> str:
-        note = self._pose_note(y)
+        note = self._pose_note(y) + self._law_note()
         return note[2:] if note else ""

@@ -21,6 +21,7 @@ does not define its own ``compiled_bias`` is refused by name on the compiled pat
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -28,6 +29,7 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
+from study import arguments
 from study.fast.signatures import BIAS
 from study.fast.signs import sign_function
 from study.reference_data import tolerance
@@ -282,14 +284,43 @@ def make_stabilization(name: str | Stabilization, **options) -> Stabilization:
             raise ValueError(f"method is a {type(name).__name__} object: its options are its fields, so "
                              f"{sorted(options)} cannot be given as well")
         return name
-    if name not in STABILIZATIONS:
-        raise ValueError(f"unknown stabilization method {name!r}; valid choices: {', '.join(STABILIZATIONS)}")
+    if not isinstance(name, str) or name not in STABILIZATIONS:
+        raise ValueError(f"method = {name!r} is not known; valid choices: {', '.join(STABILIZATIONS)}")
+    options = check_options(name, options)
     if name == "baumgarte" and ("alpha" in options or "beta" in options):
         if set(options) != {"alpha", "beta"}:
             raise ValueError(f"baumgarte: give either d and omega or alpha and beta, got {sorted(options)}")
         return Baumgarte.from_alpha_beta(options["alpha"], options["beta"])
-    try:
-        return STABILIZATIONS[name](**options)
-    except TypeError as exc:
-        valid = [f for f in STABILIZATIONS[name].__dataclass_fields__ if f not in ("name", "projects")]
-        raise ValueError(f"{name}: bad options {sorted(options)}; valid options: {', '.join(valid)}") from exc
+    return STABILIZATIONS[name](**options)
+
+
+def method_options(name: str) -> dict[str, str]:
+    """The options of the method ``name`` and their declared types ('float', 'int', 'str', 'float | tuple')."""
+    fields = {f.name: str(f.type) for f in dataclasses.fields(STABILIZATIONS[name]) if f.name not in ("name", "projects")}
+    return {**fields, "alpha": "float", "beta": "float"} if name == "baumgarte" else fields
+
+
+def check_options(name: str, options: dict, source: str = "") -> dict:
+    """``options`` of the method ``name``, each of its declared type (an integer option takes no fraction, a
+    number no text or boolean); a ValueError names an unknown option, or a value and its type. ``source``
+    prefixes the names (e.g. '--option ')."""
+    declared = method_options(name)
+    unknown = sorted(set(options) - set(declared))
+    if unknown:
+        valid = ", ".join(declared) if declared else "none (it takes no options)"
+        raise ValueError(f"{', '.join(source + k for k in unknown)}: not an option of method {name!r}; valid "
+                         f"options: {valid}")
+    checked = {}
+    for key, value in options.items():
+        kind, where = declared[key], f"{name}: {source}{key}"
+        if kind == "int":
+            checked[key] = arguments.number(where, value, positive=False, whole=True)
+        elif kind == "float":
+            checked[key] = arguments.number(where, value, positive=False)
+        elif kind == "str":
+            checked[key] = arguments.choice(where, value, SIGN_FUNCTIONS) if key == "sgn" else arguments.text(where, value)
+        elif isinstance(value, (list, tuple, np.ndarray)):   # a value per constraint
+            checked[key] = tuple(arguments.number(f"{where}[{i}]", v, positive=False) for i, v in enumerate(value))
+        else:
+            checked[key] = arguments.number(where, value, positive=False)
+    return checked

@@ -143,7 +143,7 @@ class FrictionDynamics(Dynamics):
 
     def _setup(self, t, q, qd, mode, stick, s):
         eom = self.eom
-        J = eom.phi_q(q)
+        J = self._phi_q(t, q)
         c = eom.gamma(q, qd) + self.stabilization.bias(eom.phi(q), J @ qd)
         Jt = np.array([np.asarray(ct.tangent_jacobian(q), dtype=float) for ct in eom.contacts])
         bt = np.array([float(ct.tangent_bias(q, qd)) for ct in eom.contacts])
@@ -154,7 +154,7 @@ class FrictionDynamics(Dynamics):
             s = s_m if s is None else s
         stick = np.asarray(stick, dtype=bool)
         s = np.where(stick, 0.0, np.asarray(s, dtype=float))
-        M, Q = eom.mass(q), self._forces(t, q, qd, self.load_mode(mode))
+        M, Q = self._mass(t, q), self._forces(t, q, qd, self.load_mode(mode))
         return M, Q, J, c, Jt, bt, v_t, stick, s
 
     def contact_solution(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> ContactSolution:

@@ -1,0 +1,91 @@
+"""Checks of arguments at the door: each names the value, where it came from and why it is wrong.
+
+``where`` is the source as the user wrote it: an argument name (``"t_end"``), a flag
+(``"--t-end"``), or a file and key (``"run.toml group 'g': options.rtol"``). Every check raises a
+ValueError (so the command line reports it in one line) and returns the value converted.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import numbers
+from typing import Any, Iterable
+
+import numpy as np
+
+
+def shown(value: Any) -> str:
+    """A value as the user wrote it: repr, but dates and times (TOML has them) in their ISO form."""
+    if isinstance(value, (datetime.date, datetime.time)):
+        return value.isoformat()
+    return repr(value)
+
+
+def number(where: str, value: Any, *, positive: bool = True, whole: bool = False, optional: bool = False):
+    """A real, finite number (> 0 unless ``positive=False``; an integer if ``whole``); None if ``optional``.
+
+    Booleans, text, dates and complex numbers are refused: TOML and Python let them pass as numbers.
+    """
+    if value is None and optional:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        kind = type(value).__name__
+        raise ValueError(f"{where} = {shown(value)} must be a number, not {'text' if kind == 'str' else kind}")
+    value = float(value) if not isinstance(value, numbers.Integral) else int(value)
+    if positive and not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{where} = {value!r} must be finite and > 0")
+    if not math.isfinite(value):
+        raise ValueError(f"{where} = {value!r} must be finite")
+    if whole:
+        if value != int(value):
+            raise ValueError(f"{where} = {value!r} must be a whole number")
+        return int(value)
+    return value
+
+
+def choice(where: str, value: Any, choices: Iterable[str], *, optional: bool = False):
+    """One of ``choices`` (text); None if ``optional``."""
+    choices = tuple(choices)
+    if value is None and optional:
+        return None
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{where} = {value!r} is not known; valid choices: {', '.join(choices)}")
+    return value
+
+
+def flag(where: str, value: Any) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{where} = {value!r} must be True or False")
+    return bool(value)
+
+
+def function(where: str, value: Any, *, optional: bool = True):
+    if value is None and optional:
+        return None
+    if not callable(value):
+        raise ValueError(f"{where} = {value!r} must be callable (or None)")
+    return value
+
+
+def text(where: str, value: Any, *, optional: bool = False, empty: bool = False):
+    if value is None and optional:
+        return None
+    if not isinstance(value, str) or (not empty and not value.strip()):
+        raise ValueError(f"{where} = {value!r} must be {'text' if empty else 'non-empty text'}")
+    return value
+
+
+def state(where: str, value: Any, size: int, names: Iterable[str] = ()) -> np.ndarray:
+    """A state vector of ``size`` real, finite numbers."""
+    array = np.asarray(value)
+    if array.dtype.kind not in "biuf" or array.dtype.kind == "b":
+        what = "complex numbers" if array.dtype.kind == "c" else f"{array.dtype} values"
+        raise ValueError(f"{where} = {value!r} must hold real numbers, got {what}")
+    array = array.astype(float)
+    if array.shape != (size,):
+        named = f" ({', '.join(names)})" if names else ""
+        raise ValueError(f"{where} has shape {array.shape}: the equations have {size} coordinates{named}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{where} = {array} must be finite")
+    return array
