@@ -118,7 +118,7 @@ def available_mechanisms(reference_dir: Path | None = None) -> tuple[str, ...]:
     found = []
     for path in sorted((reference_dir or REFERENCE_DIR).glob("*.toml")):
         try:
-            meta = _read(path).get("meta", {})
+            meta = _parsed(path).get("meta", {})
         except ParameterError:
             continue
         if isinstance(meta, dict) and meta.get("mechanism") == path.stem:
@@ -139,12 +139,18 @@ def _path_for(mechanism: str, reference_dir: Path | None) -> Path:
 
 
 def _read(path: Path) -> dict[str, Any]:
-    """The parsed TOML file (a fresh copy; parsed once per content, the stamp being path, size and time)."""
+    """The parsed TOML file, a fresh copy the caller may change."""
+    return copy.deepcopy(_parsed(path))
+
+
+def _parsed(path: Path) -> dict[str, Any]:
+    """The parsed TOML file, shared (not to be changed): parsed once per content, the stamp being path, size
+    and modification time."""
     try:
         stat = Path(path).stat()
     except FileNotFoundError:
         raise ParameterError(f"{path}: parameter file not found") from None
-    return copy.deepcopy(_parse(str(path), stat.st_size, stat.st_mtime_ns))
+    return _parse(str(path), stat.st_size, stat.st_mtime_ns)
 
 
 @functools.lru_cache(maxsize=64)
