@@ -2,9 +2,11 @@
 
 For each case: whether it passed the horizontal positions (rank Phi_q drops from 2N to N there) or
 stopped, where and why (the failure record the pipeline keeps), the drift of the total mechanical
-energy max|E(t) - E(0)| (the benchmark's accuracy measure; the mechanism is conservative), the
-constraint violation, B0's x coordinate at the end, and the cost. A second table samples B0's x every
-0.5 s for every run that finished (the benchmark's trajectory output).
+energy max|E(t) - E(0)| (the mechanism is conservative), the constraint violation, B0's x coordinate at
+the end, its largest distance from the exact motion (:func:`study.reference_solutions.n_four_bar_x_b0`)
+over every output sample, the benchmark's verdict by that distance (high precision <= 1e-3 m, low
+precision <= 1e-1 m: reference/benchmarks.toml), and the cost. A second table samples B0's x every
+0.5 s for the reference motion and every run that finished.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import pandas as pd
 
 from study.params import load_parameters
 from study.pipeline import Case, MissingResult
+from study.reference_data import tolerance
+from study.reference_solutions import n_four_bar_x_b0
 from study.results import SimulationResult
 
 SAMPLE_EVERY = 0.5   # [s] spacing of the B0 trajectory table
@@ -40,6 +44,20 @@ def x_b0(case: Case, r: SimulationResult) -> np.ndarray:
     return load_parameters(case.mechanism, case.variant).values.L * np.cos(r.q[:, 0])
 
 
+def reference_x_b0(case: Case, t: np.ndarray) -> np.ndarray:
+    """The exact x of B0 at the times t for the case's parameter set (B0 starting at -L th0'(0) along +x)."""
+    ps = load_parameters(case.mechanism, case.variant)
+    v = ps.values
+    return n_four_bar_x_b0(t, int(v.N), v.L, v.g, v0=-v.L * ps.initial.qd_independent[0])
+
+
+def a02_verdict(error: float) -> str:
+    """The benchmark's verdict on a run whose x of B0 is at most ``error`` [m] from the reference motion."""
+    if error <= tolerance("a02_high_precision", table="benchmarks"):
+        return "high precision"
+    return "low precision" if error <= tolerance("a02_low_precision", table="benchmarks") else "fails"
+
+
 def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -> dict[str, pd.DataFrame]:
     rows, traj = [], {}
     for case in cases:
@@ -53,20 +71,25 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
             rows.append({**row, "passed": False, "stopped_at_s": float(found[-1]) if found else np.nan,
                          "error": (kind.group(1) if kind else text)[:60], "energy_drift_J": np.nan,
                          "energy_drift_relative": np.nan, "max_abs_phi": np.nan, "x_B0_end_m": np.nan,
+                         "x_B0_max_error_m": np.nan, "a02_verdict": "stopped",
                          "crank_spread_max_rad": np.nan, "nfev_or_steps": np.nan, "cpu_s": np.nan})
             continue
         E = r.energies["kinetic"] + r.energies["potential"]
+        xb, reference = x_b0(case, r), reference_x_b0(case, r.t)
+        error = float(np.abs(xb - reference).max())   # over every output sample (0.01 s): 1001, the benchmark's 400
+        every = max(int(round(SAMPLE_EVERY / (r.t[1] - r.t[0]))), 1)
+        traj.setdefault("reference (exact motion)", pd.Series(reference[::every], index=r.t[::every]))
         m = r.q.shape[1]
         cranks = r.q[:, : (m + 1) // 2]
         rows.append({**row, "passed": True, "stopped_at_s": np.nan, "error": "",
                      "energy_drift_J": float(np.abs(E - E[0]).max()),
                      "energy_drift_relative": float(np.abs(E - E[0]).max() / abs(E[0])),
-                     "max_abs_phi": float(np.abs(r.phi).max()), "x_B0_end_m": float(x_b0(case, r)[-1]),
+                     "max_abs_phi": float(np.abs(r.phi).max()), "x_B0_end_m": float(xb[-1]),
+                     "x_B0_max_error_m": error, "a02_verdict": a02_verdict(error),
                      "crank_spread_max_rad": float(np.ptp(cranks, axis=1).max()),
                      "nfev_or_steps": r.stats.get("nfev", r.stats.get("steps")),
                      "cpu_s": r.stats.get("cpu_seconds", np.nan)})
-        every = max(int(round(SAMPLE_EVERY / (r.t[1] - r.t[0]))), 1)
-        traj[f"{row['method']} ({row['setting']}, {case.engine})"] = pd.Series(x_b0(case, r)[::every], index=r.t[::every])
+        traj[f"{row['method']} ({row['setting']}, {case.engine})"] = pd.Series(xb[::every], index=r.t[::every])
     runs = pd.DataFrame(rows)
     trajectory = pd.DataFrame(traj)
     trajectory.index.name = "t_s"
