@@ -34,7 +34,7 @@ from study.errors import (EquationsError, NonFiniteError, RunBoundError, Simulat
 from study.model.eom import EquationsOfMotion, output_problem
 from study.reference_data import tolerance
 from study.solver.budget import Budget
-from study.solver.dynamics import output_error, raised_error
+from study.solver.dynamics import fmt_vector as _fmt, output_error, raised_error
 from study.solver.friction import FrictionDynamics, PainleveError
 
 Array = np.ndarray
@@ -150,10 +150,6 @@ class SingularityMonitor:
                 f"acceleration_solver='augmented_lagrangian' can", t=float(t), quantity="Phi_q",
                 pose=list(map(float, q)), measure=rho)
         self._last = (float(t), J)
-
-
-def _fmt(x) -> str:
-    return "[" + ", ".join(f"{v:.6g}" for v in np.asarray(x, dtype=float).ravel()) + "]"
 
 
 def _evaluate(name: str, call: Callable[[], Array], problems: list[str],

@@ -29,12 +29,13 @@ from study.solver.stabilization import Stabilization
 Array = np.ndarray
 
 
-def _fmt(x) -> str:
+def fmt_vector(x) -> str:
+    """A vector in one line, 6 significant digits (for messages)."""
     return "[" + ", ".join(f"{v:.6g}" for v in np.asarray(x, dtype=float).ravel()) + "]"
 
 
 def _at(t: float, q: Array, qd: Array | None) -> str:
-    return f"(at t = {t:.9g} s, q = {_fmt(q)}" + ("" if qd is None else f", qd = {_fmt(qd)}") + ")"
+    return f"(at t = {t:.9g} s, q = {fmt_vector(q)}" + ("" if qd is None else f", qd = {fmt_vector(qd)}") + ")"
 
 
 def output_error(eom: EquationsOfMotion, label: str, value, shape: tuple[int, ...], t: float, q: Array,
@@ -73,7 +74,7 @@ def mass_failure(eom: EquationsOfMotion, t: float, q: Array, M) -> SimulationErr
     asym = float(np.max(np.abs(A - A.T))) / big if big > 0 else 0.0
     note = f" (nor symmetric: max|M - M^T| / max|eigenvalue| = {asym:.3g})" if asym > 1e-12 else ""
     return NonFiniteError(
-        f"{eom.name}: mass(q) is {what}{note} at t = {t:.9g} s, q = {_fmt(q)}: smallest eigenvalue {eig.min():.6g}, "
+        f"{eom.name}: mass(q) is {what}{note} at t = {t:.9g} s, q = {fmt_vector(q)}: smallest eigenvalue {eig.min():.6g}, "
         f"largest {eig.max():.6g} (of its symmetric part; every eigenvalue must be > 0); the accelerations are not "
         f"determined by such a mass matrix (a coordinate without inertia, or a sign error in mass(q))", t=float(t),
         quantity="mass", eigenvalues=list(map(float, eig)))
