@@ -12,7 +12,7 @@ or be written by hand from plain callables.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -198,15 +198,3 @@ def output_problem(value: object, shape: tuple[int, ...]) -> str | None:
     if array.shape != shape:
         return f"has shape {array.shape}, expected {expected}"
     return None
-
-
-def as_state(q: Sequence[float], qd: Sequence[float], m: int) -> tuple[Array, Array]:
-    """Validate and convert q, qd to float arrays of shape (m,)."""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    for label, v in (("q", q), ("qd", qd)):
-        if v.shape != (m,):
-            raise ValueError(f"{label} must have shape ({m},), got {v.shape}")
-        if not np.all(np.isfinite(v)):
-            raise ValueError(f"{label} = {v} must be finite")
-    return q, qd
