@@ -273,7 +273,9 @@ def _check_inhouse_options(options: dict, t_end: float) -> None:
     for key in ("q0", "qd0"):   # a user's state: its length is checked against the equations when the case runs
         if key in options:
             value = options.pop(key)
-            arguments.state(key, value, len(value) if isinstance(value, list) else -1)
+            if not isinstance(value, list):
+                raise ValueError(f"{key} = {arguments.shown(value)} must be a list of numbers")
+            arguments.state(key, value, len(value))
     run = {k: p.default for k, p in inspect.signature(simulate).parameters.items() if p.kind == p.KEYWORD_ONLY}
     checked = set(inspect.signature(check_arguments).parameters) - {"names"}
     given = {k: options.pop(k) for k in list(options) if k in run}
@@ -287,19 +289,23 @@ def _check_inhouse_options(options: dict, t_end: float) -> None:
 
 
 def _check_exudyn_options(options: dict) -> None:
+    import inspect
+
+    from study.exudyn_models import run
     from study.exudyn_models.settings import CONFIGURATIONS, FRICTION_MODES, SOLVERS
 
-    unknown = sorted(set(options) - {"h", "solver", "output_step", "friction", "eps", "configuration", "ignore_singular"})
+    declared = dict(list(inspect.signature(run).parameters.items())[2:])   # after ps and t_end
+    unknown = sorted(set(options) - set(declared))
     if unknown:
-        raise ValueError(f"{', '.join(unknown)}: not an option of an Exudyn case; valid options: h, solver, "
-                         f"output_step, friction, eps, configuration, ignore_singular")
-    arguments.number("h", options.get("h"))
-    arguments.number("output_step", options.get("output_step"), optional=True)
-    arguments.number("eps", options.get("eps"), optional=True)
-    arguments.choice("solver", options.get("solver", "index3"), SOLVERS)
-    arguments.choice("friction", options.get("friction", "regularized"), FRICTION_MODES)
-    arguments.choice("configuration", options.get("configuration", "python"), CONFIGURATIONS)
-    arguments.flag("ignore_singular", options.get("ignore_singular", False))
+        raise ValueError(f"{', '.join(unknown)}: not an option of an Exudyn case; valid options: {', '.join(declared)}")
+    given = {k: p.default for k, p in declared.items() if p.default is not p.empty} | options
+    arguments.number("h", given.get("h"))
+    arguments.number("output_step", given["output_step"], optional=True)
+    arguments.number("eps", given["eps"])
+    arguments.choice("solver", given["solver"], SOLVERS)
+    arguments.choice("friction", given["friction"], FRICTION_MODES)
+    arguments.choice("configuration", given["configuration"], CONFIGURATIONS)
+    arguments.flag("ignore_singular", given["ignore_singular"])
 
 
 def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:

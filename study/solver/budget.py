@@ -21,6 +21,7 @@ class Budget:
         self.windows = int(tolerance("budget_windows"))
         self.t_reached = self.t_start = 0.0
         self.over = 0     # consecutive windows whose pace projects more than max_evaluations
+        self.first_over = (0, 0.0)   # (evaluations, t) where the first of them began
 
     def update(self, nfev: int, t: float, name: str, note: str = "") -> None:
         """Called with each evaluation's count and time; raises RunBoundError when the pace cannot finish."""
