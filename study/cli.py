@@ -311,10 +311,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from study.params import available_mechanisms
     from study.solver.accelerations import ACCELERATION_SOLVERS
-    from study.solver.integrate import INTEGRATORS
     from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
 
-    from study.simulate import BACKENDS, DEFAULT_OUTPUT_STEP, simulate
+    from study.simulate import BACKENDS, DEFAULT_OUTPUT_STEP, FIXED_STEP, INTEGRATOR_NAMES, simulate
     from study.solver.friction import DEFAULT_EPS, FRICTION_TREATMENTS
 
     defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
@@ -324,8 +323,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variant", "--case", dest="variant", default="seed",
                    help="parameter-set variant (default: seed; --case is an alias)")
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
-    p.add_argument("--integrator", default="RK45", choices=list(INTEGRATORS))
-    p.add_argument("--acceleration-solver", default="multiplier", choices=list(ACCELERATION_SOLVERS))
+    p.add_argument("--integrator", default="RK45", choices=list(INTEGRATOR_NAMES),
+                   help="an ODE integrator (scipy's, or RK4 with --step), or ALI3P: the index-3 augmented Lagrangian "
+                        "with mass-orthogonal projections (--step; passes singular positions)")
+    p.add_argument("--acceleration-solver", default=None, choices=list(ACCELERATION_SOLVERS),
+                   help="accelerations of the ODE integrators (default multiplier)")
     p.add_argument("--backend", default=defaults["backend"], choices=list(BACKENDS),
                    help=f"reference: Python + scipy; compiled: numba, described mechanisms (default {defaults['backend']})")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
@@ -339,7 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--atol", type=float, default=None, help="absolute tolerance (adaptive integrators; default 1e-10)")
     p.add_argument("--max-evaluations", type=float, default=None,
                    help="bound on evaluations (default in reference/tolerances.toml); confirms a large fixed-step run")
-    p.add_argument("--step", type=float, default=None, help="fixed step h [s] (RK4 only)")
+    p.add_argument("--step", type=float, default=None, help=f"fixed step h [s] ({', '.join(FIXED_STEP)} only)")
     p.add_argument("--t-end", type=float, default=20.0, help="end time [s] (default 20)")
     p.add_argument("--output-step", type=float, default=None,
                    help=f"spacing of the saved samples [s] (default {DEFAULT_OUTPUT_STEP:g})")

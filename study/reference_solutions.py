@@ -6,7 +6,8 @@ mass m, the kinetic energy is a m L^2 theta'^2 and the potential energy b m g L 
 a = (N + 1)/6 + N/2 (the N + 1 cranks rotating about their pivots, the N couplers translating) and
 b = (N + 1)/2 + N (the cranks' centres at half height, the couplers at full height). Lagrange's equation
 is the ODE 2 a L theta'' + b g cos(theta) = 0, from theta(0) = pi/2 (cranks vertical) with B0 moving
-along +x at v0: theta'(0) = -v0 / L. Point B0, the top of the first crank, is at x = L cos(theta).
+along +x at v0: theta'(0) = -v0 / L. Point B0, the top of the first crank, is at x = L cos(theta) and moves
+along x at -L sin(theta) theta'.
 
 Nothing of the study's model enters: not the description, not the generated equations, not a solver of
 the package. The motion crosses the singular positions (theta = 0, pi) smoothly; only the redundant
@@ -21,9 +22,9 @@ from scipy.integrate import solve_ivp
 from study.reference_data import tolerance
 
 
-def n_four_bar_x_b0(t: np.ndarray, n: int, length: float, g: float, v0: float = 1.0) -> np.ndarray:
-    """x of B0 at the times ``t`` [s] (increasing, from 0) for the A02 N-four-bar with ``n`` windows, B0
-    starting at ``v0`` [m/s] along +x."""
+def n_four_bar_b0(t: np.ndarray, n: int, length: float, g: float, v0: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """x of B0 [m] and its rate [m/s] at the times ``t`` [s] (increasing, from 0) for the A02 N-four-bar with ``n``
+    windows, B0 starting at ``v0`` [m/s] along +x."""
     a, b = (n + 1) / 6 + n / 2, (n + 1) / 2 + n
     t = np.asarray(t, dtype=float)
 
@@ -35,4 +36,5 @@ def n_four_bar_x_b0(t: np.ndarray, n: int, length: float, g: float, v0: float = 
                     atol=rtol * 1e-2)
     if not sol.success:
         raise RuntimeError(f"the A02 reference motion failed: {sol.message}")
-    return length * np.cos(sol.y[0])
+    theta, rate = sol.y
+    return length * np.cos(theta), -length * np.sin(theta) * rate

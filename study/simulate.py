@@ -16,11 +16,13 @@ from study.solver.accelerations import make_acceleration_solver
 from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
+from study.solver.index3 import ALI3P, integrate_index3
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import Stabilization, check_options
 
-__all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "build_dynamics", "check_run_size", "resolve", "simulate"]
+__all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", "INTEGRATOR_NAMES", "build_dynamics", "check_run_size",
+           "resolve", "simulate"]
 
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
@@ -30,6 +32,12 @@ DEFAULT_OUTPUT_STEP = 0.01
 DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10
 # 'reference': Python + scipy (the default); 'compiled': study.fast (numba).
 BACKENDS = ("reference", "compiled")
+# scipy's OdeSolvers and RK4 integrate the index-1 ODE; ALI3P (study.solver.index3) is its own index-3 formulation.
+INTEGRATOR_NAMES = (*INTEGRATORS, "ALI3P")
+FIXED_STEP = ("RK4", "ALI3P")
+# Right-hand-side evaluations a fixed step takes, at least: RK4's four stages; ALI3P's Newton iterations
+# (two where the step converges at once; more at singular positions).
+EVALUATIONS_PER_STEP = {"RK4": 4, "ALI3P": 2}
 
 
 def resolve(eom_or_mechanism, variant: str | None):
@@ -58,7 +66,7 @@ def simulate(
     atol: float | None = None,
     step: float | None = None,
     output_step: float = DEFAULT_OUTPUT_STEP,
-    acceleration_solver: str = "multiplier",
+    acceleration_solver: str | None = None,
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
     friction: str | None = None,
@@ -90,12 +98,18 @@ def simulate(
         user's subclass on the reference backend), whose fields are its options.
     integrator : str
         'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: ``rtol``, default 1e-8, and ``atol``,
-        default 1e-10) or 'RK4' (fixed ``step``, no longer than ``t_end``). An argument the chosen
-        integrator would ignore (``step`` for an adaptive one, ``rtol``/``atol`` for RK4) is refused.
-    acceleration_solver : str
-        'multiplier', 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank Phi_q: a run
-        stops at a singular pose with a SingularConfigurationError naming the time, pose and rank), or
-        'augmented_lagrangian' (passes singular poses and redundant constraints; no singularity monitor).
+        default 1e-10) or 'RK4' (fixed ``step``, no longer than ``t_end``): these integrate the
+        accelerations of ``acceleration_solver`` stabilized by ``method``. Or 'ALI3P' (fixed ``step``): the
+        index-3 augmented Lagrangian with mass-orthogonal projections of Bayo and Ledesma on the trapezoidal
+        rule (``study.solver.index3``), which holds the position constraints itself and passes singular
+        positions; it takes no ``method`` but 'none', no ``acceleration_solver``, no friction, no switching
+        loads, and runs on the reference backend. An argument the chosen integrator would ignore (``step``
+        for an adaptive one, ``rtol``/``atol`` for a fixed-step one) is refused.
+    acceleration_solver : str, optional
+        'multiplier' (the default), 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank
+        Phi_q: a run stops at a singular pose with a SingularConfigurationError naming the time, pose and
+        rank), or 'augmented_lagrangian' (passes singular poses and redundant constraints; no singularity
+        monitor).
     output_step : float
         Spacing of the saved samples [s].
     friction : {None, 'exact', 'regularized', 'sign'}
@@ -153,8 +167,14 @@ def simulate(
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, ps = resolve(eom_or_mechanism, variant)
+    index3 = integrator == "ALI3P"
+    if index3 and eom.indicators is not None:
+        raise ValueError(f"integrator 'ALI3P' does not locate the switches of {eom.name}'s discontinuous loads "
+                         f"({', '.join(eom.indicator_names) or 'its indicators'}): use an ODE integrator (e.g. 'RK45')")
+    acceleration_solver = ("augmented_lagrangian" if index3 else "multiplier") if acceleration_solver is None \
+        else acceleration_solver
     min_rtol = tolerance("integrator_min_rtol")
-    if backend == "reference" and integrator != "RK4" and rtol < min_rtol:
+    if backend == "reference" and integrator not in FIXED_STEP and rtol < min_rtol:
         raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
                          f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g} (or backend='compiled')")
     max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
@@ -202,14 +222,22 @@ def simulate(
         def indicators(t, y):
             return eom.indicators(t, y[:m], y[m:2 * m])
 
+    t_out = output_times(float(t_end), output_step)
+    if index3:
+        cpu0 = time.process_time()
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # non-finite states are diagnosed
+            traj, stats = integrate_index3(dyn, y0, float(t_end), t_out, step, ALI3P(), progress)
+        return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=None,
+                       atol=None, step=step, acceleration_solver=acceleration_solver, output_step=output_step,
+                       t_end=t_end, stabilization=stabilization, law=law)
+
     post_step = None
     if stabilization.projects:
         def post_step(y):
             q, qd, changed = stabilization.project(eom, y[:m], y[m:2 * m])
             return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
 
-    t_out = output_times(float(t_end), output_step)
-    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator == "RK4" else None, float(t_end))
+    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator in FIXED_STEP else None, float(t_end))
     cpu0 = time.process_time()
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values
         traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
@@ -217,25 +245,22 @@ def simulate(
                          switching=switching, min_step=min_step,
                          monitor=None if monitor is None else (lambda t, y: monitor.check(t, y[:m])),
                          describe=guard.describe)
-    cpu = time.process_time() - cpu0
-    nfev = dyn.nfev
-
-    result = assemble_result(dyn, traj.t, traj.y, traj.modes)
-    result.stats.update({
-        "steps": traj.steps,
-        "nfev": nfev,
-        "projections": traj.projections,
-        "restarts": traj.restarts,
-        "events": len(traj.events),
-        "event_times": [e["t"] for e in traj.events],
-        "cpu_seconds": cpu,
-        **dyn.accelerations.statistics(),
-    })
+    stats = {"steps": traj.steps, "projections": traj.projections, "restarts": traj.restarts,
+             "events": len(traj.events), "event_times": [e["t"] for e in traj.events],
+             **dyn.accelerations.statistics()}
     if switching is not None:
-        result.stats["friction_transitions"] = switching.transitions
-    result.meta.update(run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
-                                    acceleration_solver=acceleration_solver, output_step=output_step,
-                                    t_end=t_end, stabilization=stabilization, law=law))
+        stats["friction_transitions"] = switching.transitions
+    return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=rtol, atol=atol,
+                   step=step, acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
+                   stabilization=stabilization, law=law)
+
+
+def _result(dyn, traj, stats: dict, cpu: float, eom: EquationsOfMotion, ps, **settings) -> SimulationResult:
+    """The samples of a run as a SimulationResult, with its statistics and settings."""
+    nfev = dyn.nfev  # the evaluations of the run, before the samples' post-processing adds its own
+    result = assemble_result(dyn, traj.t, traj.y, traj.modes)
+    result.stats.update({"nfev": nfev, **stats, "cpu_seconds": cpu})
+    result.meta.update(run_metadata(eom, ps, **settings))
     return result
 
 
@@ -268,8 +293,8 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
              "max_output_bytes": n("max_output_bytes", max_output_bytes, optional=True)}
     if not isinstance(method, Stabilization):
         arguments.choice(w("method"), method, STABILIZATIONS)
-    arguments.choice(w("integrator"), integrator, INTEGRATORS)
-    arguments.choice(w("acceleration_solver"), acceleration_solver, ACCELERATION_SOLVERS)
+    arguments.choice(w("integrator"), integrator, INTEGRATOR_NAMES)
+    arguments.choice(w("acceleration_solver"), acceleration_solver, ACCELERATION_SOLVERS, optional=True)
     arguments.choice(w("backend"), backend, BACKENDS)
     arguments.choice(w("friction"), friction, FRICTION_TREATMENTS, optional=True)
     if friction_sgn == "sign":
@@ -281,17 +306,28 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
     arguments.function(w("progress"), progress)
     arguments.flag(w("check"), check)
     t_end = given["t_end"]
-    if integrator == "RK4":
+    if integrator in FIXED_STEP:
         if step is None:
-            raise ValueError(f"{w('integrator')} RK4 is fixed-step: give {w('step')} (the step size h > 0)")
+            raise ValueError(f"{w('integrator')} {integrator} is fixed-step: give {w('step')} (the step size h > 0)")
         if rtol is not None or atol is not None:
-            raise ValueError(f"{w('rtol')}/{w('atol')} do not apply to {w('integrator')} RK4 (fixed step)")
+            raise ValueError(f"{w('rtol')}/{w('atol')} do not apply to {w('integrator')} {integrator} (fixed step)")
         if given["step"] > t_end:
-            raise ValueError(f"{w('step')} = {step:g} s is longer than {w('t_end')} = {t_end:g} s: RK4 would take one "
-                             f"shortened step")
+            raise ValueError(f"{w('step')} = {step:g} s is longer than {w('t_end')} = {t_end:g} s: {integrator} would "
+                             f"take one shortened step")
     elif step is not None:
-        raise ValueError(f"{w('step')} = {step!r} applies to the fixed-step integrator RK4; {integrator} is adaptive "
-                         f"(its accuracy is set by {w('rtol')} and {w('atol')})")
+        raise ValueError(f"{w('step')} = {step!r} applies to the fixed-step integrators ({', '.join(FIXED_STEP)}); "
+                         f"{integrator} is adaptive (its accuracy is set by {w('rtol')} and {w('atol')})")
+    if integrator == "ALI3P":
+        not_for_index3 = [(w("method"), method, "it holds the position constraints itself",
+                           getattr(method, "name", method) != "none"),
+                          (w("acceleration_solver"), acceleration_solver, "it is its own augmented Lagrangian",
+                           acceleration_solver is not None),
+                          (w("friction"), friction, "its steps do not locate stick/slip switches (run it without friction)",
+                           friction is not None),
+                          (w("backend"), backend, "it runs on the reference backend", backend != "reference")]
+        for name, value, why, given_here in not_for_index3:
+            if given_here:
+                raise ValueError(f"{name} = {value!r} does not apply to {w('integrator')} ALI3P: {why}")
     if given["output_step"] > t_end:
         raise ValueError(f"{w('output_step')} = {output_step:g} s is longer than {w('t_end')} = {t_end:g} s (the result "
                          f"would hold only t = 0 and t_end)")
@@ -310,7 +346,7 @@ def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_en
     """Refuse, before anything is allocated, a run whose output or fixed-step cost exceeds its bounds.
 
     The output holds ~t_end / output_step samples of 1 + 3m + 3r + 2 + (loads) + 4 (contacts) columns at
-    ``output_bytes_per_value`` each; a fixed-step RK4 run takes 4 evaluations per step. The message gives
+    ``output_bytes_per_value`` each; a fixed-step run takes ``EVALUATIONS_PER_STEP`` evaluations per step. The message gives
     the estimate and the argument that raises the bound (the user's confirmation).
     """
     m, r = eom.n_coordinates, eom.n_constraints
@@ -323,13 +359,14 @@ def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_en
             f"t_end = {t_end:g} s at output_step = {output_step:g} s asks for {samples:.3g} samples of {columns} "
             f"values, about {_bytes(nbytes)} of memory, above max_output_bytes = {_bytes(max_output_bytes)}: use a "
             f"larger output_step or a shorter t_end, or pass max_output_bytes= to confirm")
-    if integrator == "RK4":
-        evaluations = 4 * np.ceil(t_end / step) + 1
+    if integrator in FIXED_STEP:
+        per_step = EVALUATIONS_PER_STEP[integrator]
+        evaluations = per_step * np.ceil(t_end / step) + 1
         if not evaluations <= max_evaluations:
             cpu = evaluations * tolerance("seconds_per_evaluation")
             raise RunTooLargeError(
-                f"RK4 with step = {step:g} s over t_end = {t_end:g} s takes {evaluations / 4:.3g} steps = "
-                f"{evaluations:.3g} evaluations (at least {_duration(cpu)} of CPU, ~{_bytes(nbytes)} of output), "
+                f"{integrator} with step = {step:g} s over t_end = {t_end:g} s takes {evaluations / per_step:.3g} steps "
+                f"= {evaluations:.3g} evaluations (at least {_duration(cpu)} of CPU, ~{_bytes(nbytes)} of output), "
                 f"above max_evaluations = {max_evaluations:g}: pass max_evaluations={evaluations:.0f} "
                 f"(--max-evaluations) to confirm, or use a larger step")
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Iterable, Iterator
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from study.params import load_parameters
 from study.pipeline.cases import Case
@@ -56,7 +57,10 @@ def run_case(case: Case) -> SimulationResult:
 def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
     """Run a case; also returns the wall time and the code version of the process that ran it."""
     t0 = time.perf_counter()
-    result = run_case(case)
+    # One BLAS thread: each worker has a core, and BLAS threads of its own (which OpenBLAS starts for matrices of
+    # the N-four-bar's size) would oversubscribe the cores and add their waiting to the case's process time.
+    with threadpool_limits(limits=1, user_api="blas"):
+        result = run_case(case)
     return result, time.perf_counter() - t0, code_version(case.engine)
 
 

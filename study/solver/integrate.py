@@ -24,7 +24,7 @@ from study.reference_data import tolerance
 Array = np.ndarray
 
 
-class _HermiteDense(DenseOutput):
+class HermiteDense(DenseOutput):
     """Cubic Hermite interpolant on one step from y and f at both ends."""
 
     def __init__(self, t_old, t, y_old, y, f_old, f):
@@ -73,7 +73,7 @@ class RK4(OdeSolver):
 
     def _dense_output_impl(self):
         t_old, y_old, f_old = self._old
-        return _HermiteDense(t_old, self.t, y_old, self.y, f_old, self.f)
+        return HermiteDense(t_old, self.t, y_old, self.y, f_old, self.f)
 
 
 INTEGRATORS: dict[str, type[OdeSolver]] = {
