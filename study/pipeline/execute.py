@@ -7,12 +7,13 @@ resumes where it stopped) and records failed cases with their error without stop
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 import traceback
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -123,8 +124,12 @@ def warm_compiled(case: Case) -> None:
     simulate(case.mechanism, variant=case.variant, t_end=1e-3, output_step=1e-3, backend="compiled")
 
 
-def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Future]]:
-    """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops."""
+def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]) -> Iterator[tuple[Case, Future]]:
+    """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops.
+
+    The reference-path cases go first (a worker compiles the compiled path meanwhile), each group longest first
+    by the wall ``seconds`` a case took when it last ran (cases not in it first of all): a long case submitted
+    last would keep one worker busy after the others ran out of work."""
     if isinstance(executor, InlineExecutor):  # one at a time, so each is saved before the next starts
         for case in todo:
             yield case, executor.submit(_run_case_timed, case)
@@ -132,7 +137,8 @@ def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Futu
     first = next((c for c in todo if compiled(c)), None)
     if first is not None:   # its errors, if any, are those of the compiled cases, reported with them
         executor.submit(warm_compiled, first)
-    futures = {executor.submit(_run_case_timed, case): case for case in sorted(todo, key=compiled)}
+    order = sorted(todo, key=lambda c: (compiled(c), -seconds.get(c.name, math.inf)))
+    futures = {executor.submit(_run_case_timed, case): case for case in order}
     try:
         for future in as_completed(futures):
             yield futures[future], future
@@ -142,8 +148,10 @@ def _outcomes(executor: Executor, todo: list[Case]) -> Iterator[tuple[Case, Futu
 
 
 def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
-              stream=None) -> RunSummary:
+              stream=None, seconds: Mapping[str, float] | None = None) -> RunSummary:
     """Run every case without a saved result on ``executor``; save each as it completes.
+
+    ``seconds``: the wall seconds each case (by name) took when it last ran, to start the longest first.
 
     Identical cases (same key) run once. A case that raises is recorded (``Store.record_failure``)
     and the others go on. On KeyboardInterrupt the pending cases are cancelled; finished results
@@ -168,7 +176,7 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     if not todo:
         return summary
     progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
-    for case, future in _outcomes(executor, todo):
+    for case, future in _outcomes(executor, todo, seconds or {}):
         try:
             result, wall, worker_code = future.result()
             if worker_code != code_version(case.engine):  # e.g. a Dask worker with another installed copy

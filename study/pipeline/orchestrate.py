@@ -8,6 +8,8 @@ import time
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+import pandas as pd
+
 from study.integrity import atomic_write
 from study.pipeline.cases import CASES_DIR, load_case_lists
 from study.pipeline.execute import run_cases
@@ -17,6 +19,20 @@ from study.pipeline.summaries import backend_agreement, backend_cpu, failures_ta
 from study.pipeline.tables import table_entry, table_record, write_tables
 
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
+CASE_SECONDS = "case_wall_timing"  # timing/<name>.csv: the wall seconds of each case when it last ran (queue order)
+
+
+def case_seconds(reports_dir: Path, stream) -> dict[str, float]:
+    """The wall seconds each case took when it last ran, by name, from ``timing/case_wall_timing.csv``."""
+    path = Path(reports_dir) / "timing" / f"{CASE_SECONDS}.csv"
+    if not path.exists():
+        return {}
+    try:
+        frame = pd.read_csv(path)
+        return {str(k): float(v) for k, v in zip(frame["case"], frame["wall_s"])}
+    except (ValueError, KeyError, pd.errors.ParserError) as exc:
+        print(f"{path} is unreadable ({type(exc).__name__}: {exc}): the cases are queued in list order", file=stream)
+        return {}
 
 
 def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
@@ -32,6 +48,7 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     Returns a record with the wall time per stage, the counts and the failures (for the manifest).
     """
     stream = stream or sys.stderr
+    studies = None if studies is None else list(studies)
     record_root = Path(cache_root if record_root is None else record_root)
     case_lists = load_case_lists(folder, studies)
     for cl in case_lists:
@@ -40,10 +57,15 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     record: dict[str, Any] = {"stages": {}, "studies": {}, "case_keys": {}, "case_wall_seconds": {}}
     t0 = time.perf_counter()
     title = case_lists[0].study if len(case_lists) == 1 else f"cases of {len(case_lists)} studies"
+    seconds = case_seconds(reports_dir, stream)
     with make_executor(workers, scheduler) as executor:   # one queue for every study: no worker waits for a
         run = run_cases([c for cl in case_lists for c in cl.all_cases], store, executor,   # study's last case
-                        title=title, stream=stream)
+                        title=title, stream=stream, seconds=seconds)
     record["stages"]["run"] = time.perf_counter() - t0
+    seconds.update(run.wall_seconds)
+    if not studies:   # a run of every study: cases no longer in any list are dropped
+        seconds = {c.name: seconds[c.name] for cl in case_lists for c in cl.all_cases if c.name in seconds}
+    write_tables({CASE_SECONDS: pd.DataFrame({"case": list(seconds), "wall_s": list(seconds.values())})}, reports_dir)
     for cl in case_lists:
         names = {c.name for c in cl.all_cases}
         mine = lambda d: {k: v for k, v in d.items() if k in names}  # noqa: E731
