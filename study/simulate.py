@@ -322,7 +322,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
                            getattr(method, "name", method) != "none"),
                           (w("acceleration_solver"), acceleration_solver, "it is its own augmented Lagrangian",
                            acceleration_solver is not None),
-                          (w("friction"), friction, "its steps do not locate stick/slip switches (run it without friction)",
+                          (w("friction"), friction, f"its steps do not locate stick/slip switches; run it with {w('friction')} none",
                            friction is not None),
                           (w("backend"), backend, "it runs on the reference backend", backend != "reference")]
         for name, value, why, given_here in not_for_index3:

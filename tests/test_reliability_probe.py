@@ -145,6 +145,15 @@ add(F, "compiled_augmented_lagrangian", sim("--backend", "compiled", "--accelera
                                             "augmented_lagrangian"), 2, "augmented_lagrangian", "compiled")
 add(F, "compiled_radau", sim("--backend", "compiled", "--integrator", "Radau"), 2, "Radau", "compiled")
 add(F, "variant_unknown_named", sim("--variant", "nope"), 2, "'nope'", "valid choices")
+add(F, "ali3p_without_step", sim("--integrator", "ALI3P"), 2, "--integrator ALI3P", "fixed-step", "--step")
+add(F, "ali3p_with_default_exact_friction", sim("--integrator", "ALI3P", "--step", "0.001"), 2,
+    "--friction = 'exact'", "--integrator ALI3P", "--friction none")
+for flags, fragment in ((("--method", "baumgarte"), "--method = 'baumgarte'"),
+                        (("--acceleration-solver", "multiplier"), "--acceleration-solver = 'multiplier'"),
+                        (("--backend", "compiled"), "--backend = 'compiled'"),
+                        (("--rtol", "1e-8"), "--rtol/--atol")):
+    add(F, f"ali3p_with_{flags[0][2:].replace('-', '_')}", sim("--integrator", "ALI3P", "--step", "0.001",
+                                                             "--friction", "none", *flags), 2, fragment, "ALI3P")
 add(F, "output_step_longer_than_horizon", sim("--output-step", "1"), 2, "--output-step = 1", "--t-end = 0.05")
 add(F, "verify_zero_ulps", lambda tmp: ["verify", "slider_crank", "--perturb", "--ulps", "0",
                                         "--out", str(tmp / "r")], 2, "--ulps 0")
@@ -465,7 +474,8 @@ def summary_tables(tmp):
     record = tmp / "record"
     pl.run_pipeline(tmp / "reports", tmp / "cache", workers=1, folder=folder, stream=io.StringIO(),
                     record_root=record)
-    written = [*(tmp / "reports" / "tables").glob("sliding_mode*.csv"), *(tmp / "reports" / "timing").glob("*.csv")]
+    written = [*(tmp / "reports" / "tables").glob("sliding_mode*.csv"),
+               *(tmp / "reports" / "timing").glob("sliding_mode*.csv")]
     return record, max(written, key=lambda p: p.read_text().count("\n"))
 
 

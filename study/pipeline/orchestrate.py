@@ -65,7 +65,11 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     seconds.update(run.wall_seconds)
     if not studies:   # a run of every study: cases no longer in any list are dropped
         seconds = {c.name: seconds[c.name] for cl in case_lists for c in cl.all_cases if c.name in seconds}
-    write_tables({CASE_SECONDS: pd.DataFrame({"case": list(seconds), "wall_s": list(seconds.values())})}, reports_dir)
+    paths = write_tables({CASE_SECONDS: pd.DataFrame({"case": list(seconds), "wall_s": list(seconds.values())})},
+                         reports_dir)
+    written = record_root / "tables" / f"{CASE_SECONDS}.json"   # recorded like a study's tables
+    written.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(written, json.dumps({str(p.resolve()): table_entry(p) for p in paths}, indent=1))
     for cl in case_lists:
         names = {c.name for c in cl.all_cases}
         mine = lambda d: {k: v for k, v in d.items() if k in names}  # noqa: E731
