@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from study import EquationsOfMotion
 from study.errors import SimulationError
 from study.mechanisms import initial_state, load
 from study.reference_data import tolerance
@@ -61,6 +62,17 @@ def test_applied_loads_and_their_work_converge_at_second_order():
         errors.append([np.abs(r.q - ref.q).max()] + [np.abs(r.energies[k] - ref.energies[k]).max() for k in works])
     orders = np.log2(np.array(errors[0]) / np.array(errors[1]))
     assert (orders >= MIN_ORDER).all(), (errors, orders)
+
+
+def test_without_constraints_it_is_the_trapezoidal_rule():
+    """A unit oscillator x'' = -x (no constraint rows) over one period: second-order convergence to cos t."""
+    eom = EquationsOfMotion(1, 0, mass=lambda q: np.eye(1), forces=lambda t, q, qd: -q, phi=lambda q: np.zeros(0),
+                            phi_q=lambda q: np.zeros((0, 1)), gamma=lambda q, qd: np.zeros(0))
+    errors = []
+    for h in (2e-2, 1e-2):
+        r = simulate(eom, [1.0], [0.0], t_end=2 * np.pi, integrator="ALI3P", step=h, output_step=0.1)
+        errors.append(np.abs(r.q[:, 0] - np.cos(r.t)).max())
+    assert np.log2(errors[0] / errors[1]) >= MIN_ORDER, errors
 
 
 def test_a_step_that_does_not_converge_stops_the_run_naming_the_time():

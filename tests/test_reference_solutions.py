@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from study.reference_data import tolerance
+from study.reference_data import tolerance, values
 from study.reference_solutions import n_four_bar_b0
 
 
@@ -25,3 +25,13 @@ def test_a02_reference_conserves_the_branch_energy():
     energy = a * length**2 * thd**2 + b * g * length * np.sin(th)
     assert np.ptp(energy[5:-5]) <= 1e-6 * energy[0]
     assert np.abs(vx - np.gradient(x, t))[5:-5].max() <= 1e-6   # the rate is x's derivative, to the same error
+
+
+def test_a02_reference_matches_exudyns_extrapolated_step_sequence_at_10_s():
+    """Exudyn's test model lists B0 at 10 s for h = 2.5e-4 and 1.25e-4 s (second order): the exact motion must lie
+    within the finest run's estimated error of their Richardson extrapolation, for the position and the rate."""
+    coarse = np.array(values("a02_exudyn_b0_10s_h2_5e-4", table="benchmarks"))
+    fine = np.array(values("a02_exudyn_b0_10s_h1_25e-4", table="benchmarks"))
+    extrapolated, error_of_fine = fine + (fine - coarse) / 3, np.abs(fine - coarse) / 3
+    x, vx = n_four_bar_b0(np.array([0.0, 10.0]), 2, 1.0, 9.81)
+    assert (np.abs(np.array([x[-1], vx[-1]]) - extrapolated) <= error_of_fine).all()

@@ -86,7 +86,8 @@ def integrate_index3(dyn: Dynamics, y0: Array, t_end: float, t_out: Array, step:
     qdd = dyn.evaluate(t, q, qd)[0] if qdd0 is None else np.array(qdd0, dtype=float)
     J0 = dyn._phi_q(t, q)
     rows = float(np.max(np.einsum("ij,ij->i", J0, J0), initial=0.0))
-    kappa = settings.penalty * float(np.max(np.diag(dyn._mass(t, q)))) / max(rows, np.finfo(float).tiny)
+    # no constraint rows (or a Jacobian of zeros at q0): nothing to penalise, the step is the trapezoidal rule alone
+    kappa = settings.penalty * float(np.max(np.diag(dyn._mass(t, q)))) / rows if rows > 0 else 0.0
     power = dyn.powers(t, q, qd)
     lam = np.zeros(eom.n_constraints)      # lam~ = h^2/4 lambda of the last step
     h_last = step
