@@ -16,7 +16,7 @@ from study.solver.accelerations import make_acceleration_solver
 from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
-from study.solver.index3 import ALI3P, integrate_index3
+from study.solver.index3 import ALI3P, NAME as INDEX3, integrate_index3
 from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import Stabilization, check_options
@@ -33,11 +33,11 @@ DEFAULT_RTOL, DEFAULT_ATOL = 1e-8, 1e-10
 # 'reference': Python + scipy (the default); 'compiled': study.fast (numba).
 BACKENDS = ("reference", "compiled")
 # scipy's OdeSolvers and RK4 integrate the index-1 ODE; ALI3P (study.solver.index3) is its own index-3 formulation.
-INTEGRATOR_NAMES = (*INTEGRATORS, "ALI3P")
-FIXED_STEP = ("RK4", "ALI3P")
+INTEGRATOR_NAMES = (*INTEGRATORS, INDEX3)
+FIXED_STEP = ("RK4", INDEX3)
 # Right-hand-side evaluations a fixed step takes, at least: RK4's four stages; ALI3P's Newton iterations
 # (two where the step converges at once; more at singular positions).
-EVALUATIONS_PER_STEP = {"RK4": 4, "ALI3P": 2}
+EVALUATIONS_PER_STEP = {"RK4": 4, INDEX3: 2}
 
 
 def resolve(eom_or_mechanism, variant: str | None):
@@ -167,7 +167,7 @@ def simulate(
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, ps = resolve(eom_or_mechanism, variant)
-    index3 = integrator == "ALI3P"
+    index3 = integrator == INDEX3
     if index3 and eom.indicators is not None:
         raise ValueError(f"integrator 'ALI3P' does not locate the switches of {eom.name}'s discontinuous loads "
                          f"({', '.join(eom.indicator_names) or 'its indicators'}): use an ODE integrator (e.g. 'RK45')")
@@ -317,7 +317,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
     elif step is not None:
         raise ValueError(f"{w('step')} = {step!r} applies to the fixed-step integrators ({', '.join(FIXED_STEP)}); "
                          f"{integrator} is adaptive (its accuracy is set by {w('rtol')} and {w('atol')})")
-    if integrator == "ALI3P":
+    if integrator == INDEX3:
         not_for_index3 = [(w("method"), method, "it holds the position constraints itself",
                            getattr(method, "name", method) != "none"),
                           (w("acceleration_solver"), acceleration_solver, "it is its own augmented Lagrangian",

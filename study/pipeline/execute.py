@@ -58,8 +58,9 @@ def run_case(case: Case) -> SimulationResult:
 def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
     """Run a case; also returns the wall time and the code version of the process that ran it."""
     t0 = time.perf_counter()
-    # One BLAS thread: each worker has a core, and BLAS threads of its own (which OpenBLAS starts for matrices of
-    # the N-four-bar's size) would oversubscribe the cores and add their waiting to the case's process time.
+    # One BLAS thread, so that a result does not depend on the host's core count (OpenBLAS's threaded kernels round
+    # differently: they moved Radau's step sequence on Andrews' squeezer), and so that a worker, which has a core,
+    # does not oversubscribe the cores and count its BLAS threads' waiting as the case's process time.
     with threadpool_limits(limits=1, user_api="blas"):
         result = run_case(case)
     return result, time.perf_counter() - t0, code_version(case.engine)

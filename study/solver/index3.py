@@ -54,7 +54,7 @@ class ALI3P:
         iteration limit at the crossings, while 1e7, 1e8 and 1e9 gave errors against the exact motion within
         1e-8 m of each other, with at most 15, 9 and 4 iterations in a step.
     tol : float
-        A step has converged when max|dq| <= tol (1 + max|q|): 1e-12, a hundred round-offs of angles of O(10) rad
+        A step has converged when max|dq| <= tol (1 + max|q|): 1e-12, a few thousand round-offs of the coordinates
         and far below the trapezoidal rule's local error (~h^3 |q'''| = 1e-8 at h = 1e-3 on the N-four-bar).
     max_iter : int
         50 Newton iterations: away from singular positions 2-3 are enough.
@@ -71,19 +71,18 @@ class ALI3P:
 
 
 def integrate_index3(dyn: Dynamics, y0: Array, t_end: float, t_out: Array, step: float,
-                     settings: ALI3P = ALI3P(), progress: Callable[[float], None] | None = None,
-                     qdd0: Array | None = None) -> tuple[Trajectory, dict]:
+                     settings: ALI3P = ALI3P(), progress: Callable[[float], None] | None = None
+                     ) -> tuple[Trajectory, dict]:
     """Integrate from t = 0 with the fixed step ``step`` (the last one shortened to reach t_end) and sample at
     ``t_out`` by cubic Hermite interpolation of [q, qd, W] between steps. Returns the samples and statistics.
 
     ``dyn`` provides the checked M(q) and Phi_q(q), the forces and the powers of the applied loads (whose work W
-    is integrated by the trapezoidal rule too); ``qdd0`` the initial accelerations (else from ``dyn``).
+    is integrated by the trapezoidal rule too) and the initial accelerations (its acceleration solver's).
     """
     eom = dyn.eom
-    m = eom.n_coordinates
     q, qd, work = (np.array(part, dtype=float) for part in dyn.split(y0))
     t = 0.0
-    qdd = dyn.evaluate(t, q, qd)[0] if qdd0 is None else np.array(qdd0, dtype=float)
+    qdd = dyn.evaluate(t, q, qd)[0]
     J0 = dyn._phi_q(t, q)
     rows = float(np.max(np.einsum("ij,ij->i", J0, J0), initial=0.0))
     # no constraint rows (or a Jacobian of zeros at q0): nothing to penalise, the step is the trapezoidal rule alone

@@ -9,7 +9,8 @@ crossing lies within a sample of it), the solves whose iteration reached its lim
 acceleration-level augmented Lagrangian: evaluations), the constraint violation, B0's x coordinate at the
 end, the largest distance of B0's x and of its rate from the exact motion
 (:func:`study.reference_solutions.n_four_bar_b0`) over every output sample, the benchmark's verdict by both
-(high precision: both <= 1e-3 m, m/s; low precision: <= 1e-1: reference/benchmarks.toml), and the cost. A second table samples B0's x every 0.5 s for the reference motion and every N = 2 run that finished.
+(high precision: both <= 1e-3 m, m/s; low precision: <= 1e-1: reference/benchmarks.toml), and the cost. A
+second table samples B0's x every 0.5 s for the reference motion and every N = 2 run that finished.
 """
 
 from __future__ import annotations
@@ -100,7 +101,7 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
             continue
         E = r.energies["kinetic"] + r.energies["potential"]
         (xb, vxb), (reference, reference_vx) = b0(case, r), reference_b0(case, r.t)
-        error = float(np.abs(xb - reference).max())   # over every output sample (0.01 s): 1001, the benchmark's 400
+        error = float(np.abs(xb - reference).max())   # over every output sample: 1001 or 401, the benchmark's 400
         error_vx = float(np.abs(vxb - reference_vx).max())
         every = max(int(round(SAMPLE_EVERY / (r.t[1] - r.t[0]))), 1)
         if row["N"] == 2:
