@@ -56,7 +56,8 @@ def describe_text(name: str, variant: str = "seed") -> str:
         role = "cut, rows " + ", ".join(r for r, _ in joint_rows(d, placed, j)) if j.name in cut_names else "tree"
         if isinstance(j, Prismatic):
             text = (f"  {j.name}: prismatic, {_point(j.slider)} slides on {_point(j.guide)} along ({show(j.axis[0])}, "
-                    f"{show(j.axis[1])}) [{role}]")
+                    f"{show(j.axis[1])})" + (f" by the travel {show(j.travel)}" if j.travel is not None else "")
+                    + f" [{role}]")
             if j.friction is not None:
                 f = j.friction
                 text += (f"; Coulomb contact mu_s = {show(f.mu_static)}, mu_k = {show(f.mu_kinetic)}, "

@@ -7,10 +7,10 @@ constraint rows, contacts, loads as expressions of t, q, qd), which :mod:`study.
 
 ``relative``
     The description's own coordinates: each body's angle is the expression the description gives;
-    bodies are placed from ground along a spanning tree of revolute joints (description order, a
-    joint marked ``cut=True`` is never a tree joint); every other joint is a cut joint whose rows
-    are the loop-closure constraints. Rows that are identically zero (a prismatic joint's rotation
-    lock when the angles already agree) are dropped.
+    bodies are placed from ground along a spanning tree of revolute joints and of prismatic joints that
+    have a ``travel`` (description order, a revolute joint marked ``cut=True`` is never a tree joint);
+    every other joint is a cut joint whose rows are the loop-closure constraints. Rows that are
+    identically zero (a prismatic joint's rotation lock when the angles already agree) are dropped.
 ``absolute``
     x, y, theta of every body's centre of mass (coordinates ``<body>_x``, ``<body>_y``,
     ``<body>_theta``); every joint contributes its full block of rows (see :mod:`study.model.joints`).
@@ -40,18 +40,22 @@ def absolute_names(d: Description) -> tuple[str, ...]:
 
 def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]], list]:
     """COM position and angle of every body in q, and the cut joints (description order)."""
-    angles = {name: b.angle for name, b in d.bodies.items()}
+    angles = {GROUND: sp.Integer(0), **{name: b.angle for name, b in d.bodies.items()}}
     poses: dict[str, tuple[sp.Matrix, sp.Expr]] = {GROUND: (sp.zeros(2, 1), sp.Integer(0))}
     tree: set[str] = set()
     changed = True
     while changed:  # sweep the joints in order until no body can be placed any more
         changed = False
         for j in d.joints:
-            if not isinstance(j, Revolute) or j.cut or j.name in tree:
+            if j.name in tree or (j.cut if isinstance(j, Revolute) else j.travel is None):
                 continue
-            for (pa, ta), (pb, tb) in ((j.a, j.b), (j.b, j.a)):
+            for (pa, ta), (pb, tb) in _tree_ends(j):
                 if pa in poses and pb not in poses:
                     anchor = _world(d, poses, pa, ta)
+                    if isinstance(j, Prismatic):   # along the axis, in the guide's frame, by the travel
+                        _check_sliding(d, j, angles)
+                        along = rotation(angles[j.guide[0]]) * sp.Matrix(j.axis) * j.travel
+                        anchor = anchor + (along if pa == j.guide[0] else -along)
                     local = sp.Matrix(d.bodies[pb].points[tb])
                     r = sp.expand(anchor - rotation(angles[pb]) * local)
                     poses[pb] = (r, angles[pb])
@@ -61,9 +65,24 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     missing = [b for b in d.bodies if b not in poses]
     if missing:
         raise DescriptionError(f"mechanism {d.name!r}: bodies {missing} cannot be placed from ground through "
-                               f"revolute joints (relative coordinates need a tree of revolute joints)")
+                               f"revolute joints or prismatic joints with a travel (relative coordinates need a "
+                               f"tree of such joints)")
     cut = [j for j in d.joints if j.name not in tree]
     return poses, cut
+
+
+def _tree_ends(j: Revolute | Prismatic) -> tuple:
+    """(placed end, end to place) pairs of a joint, both ways round."""
+    a, b = (j.a, j.b) if isinstance(j, Revolute) else (j.guide, j.slider)
+    return (a, b), (b, a)
+
+
+def _check_sliding(d: Description, j: Prismatic, angles: dict) -> None:
+    """A prismatic tree joint has no rows: the slider's angle must be the guide's plus the offset by itself."""
+    if sp.simplify(angles[j.slider[0]] - angles[j.guide[0]] - j.angle_offset) != 0:
+        raise DescriptionError(f"mechanism {d.name!r}: joint {j.name!r} has a travel, so it places a body without "
+                               f"constraint rows, but the slider's angle is not the guide's plus angle_offset "
+                               f"({j.angle_offset}) for every q: give the slider that angle, or drop the travel")
 
 
 def _world(d: Description, poses, body: str, point: str) -> sp.Matrix:

@@ -76,6 +76,9 @@ class Revolute:
 
 @dataclass(frozen=True)
 class Prismatic:
+    """``travel``: the slider point's position along ``axis`` from the guide point, as an expression of q. With
+    it the joint can place a body in relative coordinates (a tree joint); without it, it is a loop closure."""
+
     name: str
     slider: tuple[str, str]
     guide: tuple[str, str]
@@ -83,6 +86,7 @@ class Prismatic:
     normal: tuple[Expr, Expr]
     angle_offset: Expr = sp.Integer(0)
     friction: Friction | None = None
+    travel: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -169,10 +173,15 @@ class Description:
         self.joints.append(Revolute(name, tuple(a), tuple(b), cut))
 
     def prismatic(self, name: str, slider: tuple[str, str], guide: tuple[str, str], axis, normal,
-                  angle_offset: Any = 0, friction: Friction | None = None) -> None:
-        """Point slider[1] of slider[0] slides on the line through guide[1] along ``axis`` (guide frame)."""
+                  angle_offset: Any = 0, friction: Friction | None = None, travel: Any = None) -> None:
+        """Point slider[1] of slider[0] slides on the line through guide[1] along ``axis`` (guide frame), the
+        slider's angle being the guide's plus ``angle_offset``. ``travel`` (an expression of q, usually a
+        coordinate) is the slider point's position along the axis: given, the joint can place the slider (or the
+        guide) in relative coordinates, like a revolute joint with its angle (a cart on a rail, a piston in a
+        rotating cylinder); a joint with friction cannot have one (its normal force is its gap row's multiplier)."""
         self.joints.append(Prismatic(name, tuple(slider), tuple(guide), tuple(sp.sympify(v) for v in axis),
-                                     tuple(sp.sympify(v) for v in normal), sp.sympify(angle_offset), friction))
+                                     tuple(sp.sympify(v) for v in normal), sp.sympify(angle_offset), friction,
+                                     None if travel is None else sp.sympify(travel)))
 
     # --- load-law inputs ---------------------------------------------------------------------
     def _input(self, kind: str, body: str, point: str | None) -> sp.Symbol:
@@ -280,6 +289,13 @@ class Description:
                     problems.append(f"joint {j.name!r}: axis and normal must be orthogonal unit vectors")
                 if j.friction is not None and j.guide[0] != GROUND:
                     problems.append(f"joint {j.name!r}: friction is supported on guides fixed in ground only")
+                if j.travel is not None:
+                    stray = j.travel.free_symbols - params - set(self.q)
+                    if stray:
+                        problems.append(f"joint {j.name!r}: travel uses unknown symbols {sorted(map(str, stray))}")
+                    if j.friction is not None:
+                        problems.append(f"joint {j.name!r}: a joint with friction cannot have a travel (its normal "
+                                        f"force is the multiplier of its gap row, which a tree joint does not have)")
         allowed = params | set(self.inputs) | {self.t} | {m for _, _, m in self.switches}
         for ld in self.loads:
             if ld.body not in self.bodies:
