@@ -2,14 +2,20 @@
 
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError, RunTooLargeError,
                           SimulationError, SingularConfigurationError)
+from study.mechanisms import consistent_state, equations_of
 from study.model import EquationsOfMotion, MechanismBuilder, SlidingContact
+from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterError, ParameterSet, load_parameters
 from study.results import SimulationResult
 from study.simulate import simulate
 
 __all__ = [
+    "GROUND",
+    "Description",
+    "DescriptionError",
     "EquationsError",
     "EquationsOfMotion",
+    "Friction",
     "MechanismBuilder",
     "NonFiniteError",
     "ParameterError",
@@ -21,6 +27,8 @@ __all__ = [
     "SimulationResult",
     "SingularConfigurationError",
     "SlidingContact",
+    "consistent_state",
+    "equations_of",
     "load_parameters",
     "simulate",
 ]

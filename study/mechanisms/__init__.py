@@ -62,6 +62,14 @@ def constraint_unit(name: str) -> str:
     return ", ".join(units)
 
 
+def equations_of(d: Description, coordinates: str = "relative", parameter_hash: str = "") -> EquationsOfMotion:
+    """The compiled equations of motion of any description, a user's or the study's, in 'relative' (the
+    description's own coordinates) or 'absolute' coordinates (x, y, theta of every body)."""
+    if coordinates not in COORDINATE_SETS:
+        raise ValueError(f"unknown coordinate set {coordinates!r}; valid choices: {', '.join(COORDINATE_SETS)}")
+    return compile_description(lower(d, coordinates), parameter_hash)
+
+
 def builder(ps: ParameterSet, coordinates: str = "relative") -> MechanismBuilder:
     """The body-level equations' builder of a parameter set in a coordinate set."""
     return lower(description(ps), coordinates)
@@ -72,11 +80,9 @@ _EQUATIONS: dict[tuple, EquationsOfMotion] = {}
 
 def equations(ps: ParameterSet, coordinates: str = "relative") -> EquationsOfMotion:
     """Compiled equations of motion of a parameter set ('relative' or 'absolute' coordinates)."""
-    if coordinates not in COORDINATE_SETS:
-        raise ValueError(f"unknown coordinate set {coordinates!r}; valid choices: {', '.join(COORDINATE_SETS)}")
     key = (ps.mechanism, ps.values, coordinates)   # the values themselves: a replaced set keeps its sha256
     if key not in _EQUATIONS:
-        _EQUATIONS[key] = compile_description(builder(ps, coordinates), ps.sha256)
+        _EQUATIONS[key] = equations_of(description(ps), coordinates, ps.sha256)
     return _EQUATIONS[key]
 
 
@@ -88,7 +94,10 @@ def load(name: str, variant: str = "seed", coordinates: str = "relative") -> tup
 
 def on_branch(ps: ParameterSet, q: np.ndarray) -> bool:
     """Whether relative coordinates q lie on the description's assembly branch (True without one)."""
-    d = description(ps)
+    return _on_branch(description(ps), q)
+
+
+def _on_branch(d: Description, q: np.ndarray) -> bool:
     if d.branch is None:
         return True
     expr = d.branch[0].xreplace({getattr(d.p, k): float(v) for k, v in d.values.items()})
@@ -120,13 +129,23 @@ def initial_state(ps: ParameterSet, eom: EquationsOfMotion | None = None) -> Con
     (its number of coordinates follows the parameter set) provides ``initial_guess(ps) -> (q, qd)``
     in its module, which replaces the printed q(0).
     """
-    eom = equations(ps) if eom is None else eom
+    return consistent_state(description(ps), ps, equations(ps) if eom is None else eom, initial_guess(ps)[0])
+
+
+def consistent_state(d: Description, ps: ParameterSet, eom: EquationsOfMotion, guess=None) -> ConsistentState:
+    """Consistent q(0), qd(0) of any description in its relative coordinates (``eom``: its relative equations)
+    from a parameter set's ``[initial_conditions]``: Newton from ``guess`` (default: the printed q(0)) with the
+    independent coordinates set to the specified values, then the rates; the result must lie on the
+    description's assembly branch (InitialConditionError otherwise)."""
     ic = ps.initial
-    guess = np.array(initial_guess(ps)[0], dtype=float)
+    guess = np.array(ic.printed_q if guess is None else guess, dtype=float)
+    if guess.shape != (eom.n_coordinates,):
+        raise ValueError(f"{d.name}: the initial guess has {guess.size} positions, the equations have "
+                         f"{eom.n_coordinates} coordinates")
     guess[list(ic.independent)] = ic.q_independent
     state = consistent_initial_conditions(eom, guess, ic.independent, ic.qd_independent)
-    if not on_branch(ps, state.q):
+    if not _on_branch(d, state.q):
         raise InitialConditionError(
-            f"{ps.mechanism}: Newton from the printed q(0) converged to q = {state.q}, which is not on the "
+            f"{d.name}: Newton from the printed q(0) converged to q = {state.q}, which is not on the "
             f"assembly branch '{ic.branch}'")
     return state
