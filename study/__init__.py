@@ -7,7 +7,7 @@ from study.model import EquationsOfMotion, MechanismBuilder, SlidingContact
 from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterError, ParameterSet, load_parameters
 from study.results import SimulationResult
-from study.simulate import simulate
+from study.simulate import simulate, simulate_methods
 
 __all__ = [
     "GROUND",
@@ -31,4 +31,5 @@ __all__ = [
     "equations_of",
     "load_parameters",
     "simulate",
+    "simulate_methods",
 ]

@@ -22,7 +22,7 @@ from study.solver.run import build_dynamics, output_times, run_bounds, run_metad
 from study.solver.stabilization import Stabilization, check_options
 
 __all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", "INTEGRATOR_NAMES", "build_dynamics", "check_run_size",
-           "resolve", "simulate"]
+           "resolve", "simulate", "simulate_methods"]
 
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
@@ -253,6 +253,12 @@ def simulate(
     return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=rtol, atol=atol,
                    step=step, acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
                    stabilization=stabilization, law=law)
+
+
+def simulate_methods(eom_or_mechanism: EquationsOfMotion | str, q0=None, qd0=None, t_end: float = 1.0, *,
+                     methods=("none", "baumgarte", "sliding_mode", "projection"), **options) -> dict[str, SimulationResult]:
+    """:func:`simulate` with each stabilization method in turn (default options), the other arguments the same."""
+    return {method: simulate(eom_or_mechanism, q0, qd0, t_end, method=method, **options) for method in methods}
 
 
 def _result(dyn, traj, stats: dict, cpu: float, eom: EquationsOfMotion, ps, **settings) -> SimulationResult:
