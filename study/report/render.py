@@ -136,9 +136,10 @@ def fmt_number(x, digits: int = 3) -> str:
 
 
 def fmt_int(x) -> str:
-    """A count as an integer; non-numbers as they are."""
+    """A count as an integer; '–' for NaN/inf (as :func:`fmt_number`); non-numbers as they are."""
     try:
-        return f"{int(round(float(x)))}"
+        x = float(x)
+        return "–" if not np.isfinite(x) else f"{int(round(x))}"
     except (TypeError, ValueError):
         return str(x)
 

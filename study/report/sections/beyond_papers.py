@@ -23,10 +23,6 @@ HEADING = "## Benchmarks beyond the papers"
 INDEX3 = "ALI3P (index-3 augmented Lagrangian)"
 
 
-def _count(x) -> str:
-    return "–" if pd.isna(x) else fmt_int(x)
-
-
 def _runs_table(runs: pd.DataFrame) -> str:
     header = ["N", "engine", "method", "setting", "singular positions", "stopped at [s]", "error",
               "energy drift max|E − E0| [J]", "relative to E0", "largest change of E between samples [J]",
@@ -35,7 +31,7 @@ def _runs_table(runs: pd.DataFrame) -> str:
     rows = [[fmt_int(r.N), r.engine, r.method, r.setting, "**passed**" if str(r.passed) == "True" else "**stopped**",
              fmt_number(r.stopped_at_s, 6), r.error if isinstance(r.error, str) else "",
              fmt_number(r.energy_drift_J), fmt_number(r.energy_drift_relative), fmt_number(r.largest_energy_step_J, 2),
-             fmt_number(r.largest_energy_step_to_crossing_s, 2), _count(r.solves_at_iteration_limit),
+             fmt_number(r.largest_energy_step_to_crossing_s, 2), fmt_int(r.solves_at_iteration_limit),
              fmt_number(r.max_abs_phi, 2), fmt_number(r.x_B0_end_m, 4), fmt_number(r.x_B0_max_error_m, 3),
              fmt_number(r.vx_B0_max_error_m_s, 3),
              f"**{r.a02_verdict}**" if r.a02_verdict == "high precision" else r.a02_verdict, fmt_number(r.cpu_s, 2)]
@@ -132,12 +128,12 @@ def _n_four_bar(ctx: ReportContext) -> list[str]:
                   f"N = 2 (errors of B0's x and of its rate): {per_step}. Observed orders between successive steps: "
                   f"{orders['x']} (x), {orders['rate']} (rate), {orders['drift']} (drift), against the trapezoidal "
                   f"rule's 2. Steps at the Newton iteration's limit (accepted at round-off, "
-                  f"`study.solver.index3.ALI3P`): {', '.join(_count(v) for v in n2['solves_at_iteration_limit'])}. "
+                  f"`study.solver.index3.ALI3P`): {', '.join(fmt_int(v) for v in n2['solves_at_iteration_limit'])}. "
                   f"No energy jump stands out at the crossings: the largest change between two samples, "
                   f"{fmt_number(n2['largest_energy_step_J'].max(), 2)} J, lies "
                   f"{fmt_number(n2['largest_energy_step_to_crossing_s'].min(), 2)} s or more from a crossing. "
                   + (f"The original size, N = 40 over 20 s (steps at the iteration limit: "
-                     f"{', '.join(_count(v) for v in n40['solves_at_iteration_limit'])}): {big}." if len(n40) else ""),
+                     f"{', '.join(fmt_int(v) for v in n40['solves_at_iteration_limit'])}): {big}." if len(n40) else ""),
                   ""]
     judged = passed[passed["x_B0_max_error_m"].notna()]
     traj = ctx.table("singular_four_bar_x_B0")
