@@ -22,6 +22,13 @@ from scipy.integrate import solve_ivp
 from study.reference_data import tolerance
 
 
+def richardson_second_order(coarse, fine) -> tuple[np.ndarray, np.ndarray]:
+    """Two results of a second-order method at steps h and h/2 -> (Richardson's extrapolation
+    v(h/2) + (v(h/2) - v(h)) / 3, the estimated error of the finer result |v(h/2) - v(h)| / 3)."""
+    coarse, fine = np.asarray(coarse, dtype=float), np.asarray(fine, dtype=float)
+    return fine + (fine - coarse) / 3, np.abs(fine - coarse) / 3
+
+
 def n_four_bar_b0(t: np.ndarray, n: int, length: float, g: float, v0: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """x of B0 [m] and its rate [m/s] at the times ``t`` [s] (increasing, from 0) for the A02 N-four-bar with ``n``
     windows, B0 starting at ``v0`` [m/s] along +x."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -16,7 +17,7 @@ from study.pipeline.execute import run_cases
 from study.pipeline.executors import make_executor
 from study.pipeline.store import Store
 from study.pipeline.summaries import backend_agreement, backend_cpu, failures_table, summarize, summary_function
-from study.pipeline.tables import table_entry, table_record, write_tables
+from study.pipeline.tables import record_tables, table_record, write_tables
 
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
 CASE_SECONDS = "case_wall_timing"  # timing/<name>.csv: the wall seconds of each case when it last ran (queue order)
@@ -29,10 +30,20 @@ def case_seconds(reports_dir: Path, stream) -> dict[str, float]:
         return {}
     try:
         frame = pd.read_csv(path)
-        return {str(k): float(v) for k, v in zip(frame["case"], frame["wall_s"])}
+        seconds = {str(k): float(v) for k, v in zip(frame["case"], frame["wall_s"])}
+        bad = [k for k, v in seconds.items() if not (math.isfinite(v) and v >= 0)]
+        if bad:
+            raise ValueError(f"wall_s of {bad[0]!r} is {seconds[bad[0]]!r}, not a duration")
+        return seconds
     except (ValueError, KeyError, pd.errors.ParserError) as exc:
         print(f"{path} is unreadable ({type(exc).__name__}: {exc}): the cases are queued in list order", file=stream)
         return {}
+
+
+def save_case_seconds(seconds: Mapping[str, float], reports_dir: Path, record_root: Path) -> None:
+    """Write ``timing/case_wall_timing.csv`` and record it like a study's tables."""
+    frame = pd.DataFrame({"case": list(seconds), "wall_s": list(seconds.values())})
+    record_tables(record_root / "tables" / f"{CASE_SECONDS}.json", write_tables({CASE_SECONDS: frame}, reports_dir))
 
 
 def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | None = None, workers: int = 2,
@@ -65,11 +76,7 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     seconds.update(run.wall_seconds)
     if not studies:   # a run of every study: cases no longer in any list are dropped
         seconds = {c.name: seconds[c.name] for cl in case_lists for c in cl.all_cases if c.name in seconds}
-    paths = write_tables({CASE_SECONDS: pd.DataFrame({"case": list(seconds), "wall_s": list(seconds.values())})},
-                         reports_dir)
-    written = record_root / "tables" / f"{CASE_SECONDS}.json"   # recorded like a study's tables
-    written.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(written, json.dumps({str(p.resolve()): table_entry(p) for p in paths}, indent=1))
+    save_case_seconds(seconds, reports_dir, record_root)
     for cl in case_lists:
         names = {c.name for c in cl.all_cases}
         mine = lambda d: {k: v for k, v in d.items() if k in names}  # noqa: E731
@@ -98,8 +105,7 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
         paths = write_tables(tables, reports_dir)
         for path in paths:
             print(f"wrote {path}", file=stream)
-        written.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(written, json.dumps({str(p.resolve()): table_entry(p) for p in paths}, indent=1))
+        record_tables(written, paths)
         record["stages"][f"summarize:{cl.study}"] = time.perf_counter() - ts
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir)
     if any(cl.samples for cl in case_lists):

@@ -36,6 +36,13 @@ def table_entry(path: Path) -> dict[str, Any]:
     return {"rows": data_rows(text), "sha256": sha256_text(text)}
 
 
+def record_tables(written: Path, paths: list[Path]) -> None:
+    """Record the tables just written (rows and SHA-256 of each) in the record file ``written``, which
+    :func:`read_table` checks them against."""
+    written.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(written, json.dumps({str(Path(p).resolve()): table_entry(p) for p in paths}, indent=1))
+
+
 def table_record(written: Path, strict: bool = False) -> dict[str, Any]:
     """The tables a study wrote last time, {path: {rows, sha256}} (older records: a list of paths).
 

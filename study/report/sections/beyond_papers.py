@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from study.report.context import ReportContext
 from study.report.sections import andrews
 from study.reference_data import tolerance, values
+from study.reference_solutions import richardson_second_order
 from study.report.render import fmt_int, fmt_number, md_table
 
 HEADING = "## Benchmarks beyond the papers"
@@ -139,8 +140,8 @@ def _n_four_bar(ctx: ReportContext) -> list[str]:
     traj = ctx.table("singular_four_bar_x_B0")
     if len(judged) and traj is not None and "reference (exact motion)" in traj:
         end = traj.iloc[-1]
-        coarse, fine = (np.array(values(f"a02_exudyn_b0_10s_{h}", table="benchmarks")) for h in ("h2_5e-4", "h1_25e-4"))
-        extrapolated = fine + (fine - coarse) / 3   # Richardson, second order
+        extrapolated = richardson_second_order(*(values(f"a02_exudyn_b0_10s_{h}", table="benchmarks")
+                                                 for h in ("h2_5e-4", "h1_25e-4")))[0]
         errors = "; ".join(f"N = {r.N}, {r.method} {r.setting} ({r.engine}): {fmt_number(r.x_B0_max_error_m, 3)} m, "
                            f"{fmt_number(r.vx_B0_max_error_m_s, 3)} m/s, **{r.a02_verdict}**"
                            for r in judged.itertuples(index=False))
