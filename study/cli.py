@@ -6,6 +6,7 @@ import argparse
 import inspect
 import json
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -237,18 +238,36 @@ def _reproduce(args: argparse.Namespace) -> int:
     record_root = _record_root(args)
     stages = {}
     code = 0
-    for name, step in (("initial", _initial), ("errata", _errata), ("run", _run), ("report", _report)):
+    # The errata check (sympy, one process) runs alongside the initial conditions and the cases; its output follows.
+    t_errata = time.perf_counter()
+    errata = subprocess.Popen([sys.executable, "-m", "study", "errata", "--out", str(args.out)],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    for name, step in (("initial", _initial), ("run", _run), ("errata", None), ("report", _report)):
+        if name == "errata":
+            output = errata.communicate()[0]
+            stages["errata"] = time.perf_counter() - t_errata
+            print(output, end="")
+            if errata.returncode:
+                print(f"error: the errata check failed (exit {errata.returncode})", file=sys.stderr)
+                return errata.returncode
+            continue
         if name == "report":  # the manifest shows the wall time of every stage before the report
             record_path = record_root / PIPELINE_RECORD
             record = json.loads(record_path.read_text())
             record["stages"].update({k: stages[k] for k in ("initial", "errata")})
             save_record(record, record_root)
         t0 = time.perf_counter()
-        code = step(args) or code
+        try:
+            code = step(args) or code
+        except BaseException:
+            errata.kill()
+            raise
         stages[name] = time.perf_counter() - t0
         if code and not (name == "run" and code == 1):  # failed cases (1) are reported; errors stop
+            errata.kill()
             return code
-    print("wall time per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items()), file=sys.stderr)
+    print("wall time per stage (errata alongside initial and run): "
+          + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items()), file=sys.stderr)
     print(f"(details per study: {record_root / PIPELINE_RECORD})", file=sys.stderr)
     print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
     return code

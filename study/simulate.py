@@ -38,6 +38,8 @@ FIXED_STEP = ("RK4", INDEX3)
 # Right-hand-side evaluations a fixed step takes, at least: RK4's four stages; ALI3P's Newton iterations
 # (two where the step converges at once; more at singular positions).
 EVALUATIONS_PER_STEP = {"RK4": 4, INDEX3: 2}
+# Integrators whose steps only scipy takes: on backend 'compiled' scipy's loop runs on compiled evaluations.
+SCIPY_STEPS_ONLY = ("Radau", "LSODA")
 
 
 def resolve(eom_or_mechanism, variant: str | None):
@@ -126,8 +128,9 @@ def simulate(
         ``resistance_reading`` if it has one, else 'holds' (``study.model.SlidingContact.resistance``).
     backend : {'reference', 'compiled'}
         'reference': the Python solver with scipy's integrators. 'compiled': generated numba code and a
-        compiled integration loop (``study.fast``; built-in mechanisms, multiplier solver, RK23/RK45/
-        DOP853/RK4); an unsupported combination raises a ValueError naming the option.
+        compiled integration loop (``study.fast``; multiplier solver, RK23/RK45/DOP853/RK4; Radau and
+        LSODA take scipy's steps on the compiled evaluations); an unsupported combination raises a
+        ValueError naming the option.
     check : bool
         Validate the equations and the initial state once before the run (``study.solver.checks``:
         symmetric positive-definite M(q0), phi_q and gamma against finite differences of phi and
@@ -174,7 +177,8 @@ def simulate(
     acceleration_solver = ("augmented_lagrangian" if index3 else "multiplier") if acceleration_solver is None \
         else acceleration_solver
     min_rtol = tolerance("integrator_min_rtol")
-    if backend == "reference" and integrator not in FIXED_STEP and rtol < min_rtol:
+    scipy_steps = backend == "reference" or integrator in SCIPY_STEPS_ONLY
+    if scipy_steps and integrator not in FIXED_STEP and rtol < min_rtol:
         raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
                          f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g} (or backend='compiled')")
     max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
@@ -204,6 +208,7 @@ def simulate(
         if friction == "exact" and resistance_reading != "holds":
             raise ValueError(f"backend 'compiled' implements resistance_reading 'holds' only, got "
                              f"{resistance_reading!r}: use backend='reference'")
+    if not scipy_steps:
         from study.fast import simulate_compiled
 
         return simulate_compiled(eom, ps, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
@@ -237,7 +242,13 @@ def simulate(
             q, qd, changed = stabilization.project(eom, y[:m], y[m:2 * m])
             return (np.concatenate([q, qd, y[2 * m:]]) if changed else y), changed
 
-    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator in FIXED_STEP else None, float(t_end))
+    rhs = None
+    if backend == "compiled":
+        from study.fast import check_supported, compiled_rhs
+
+        check_supported(integrator, acceleration_solver)
+        rhs = compiled_rhs(eom, ps, dyn)
+    guard = RunGuard(dyn, monitor, max_evaluations, step if integrator in FIXED_STEP else None, float(t_end), rhs)
     cpu0 = time.process_time()
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values
         traj = integrate(guard, 0.0, y0, float(t_end), t_out, method=integrator, rtol=rtol, atol=atol,
@@ -252,7 +263,7 @@ def simulate(
         stats["friction_transitions"] = switching.transitions
     return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=rtol, atol=atol,
                    step=step, acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
-                   stabilization=stabilization, law=law)
+                   stabilization=stabilization, law=law, backend=backend)
 
 
 def simulate_methods(eom_or_mechanism: EquationsOfMotion | str, q0=None, qd0=None, t_end: float = 1.0, *,

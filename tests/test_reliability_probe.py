@@ -143,7 +143,8 @@ add(F, "step_zero", sim("--integrator", "RK4", "--step", "0"), 2, "step", "0", "
 add(F, "step_nan", sim("--integrator", "RK4", "--step", "nan"), 2, "step", "nan")
 add(F, "compiled_augmented_lagrangian", sim("--backend", "compiled", "--acceleration-solver",
                                             "augmented_lagrangian"), 2, "augmented_lagrangian", "compiled")
-add(F, "compiled_radau", sim("--backend", "compiled", "--integrator", "Radau"), 2, "Radau", "compiled")
+add(F, "compiled_ali3p", sim("--backend", "compiled", "--integrator", "ALI3P", "--step", "0.001", "--friction", "none"),
+    2, "ALI3P", "compiled")
 add(F, "variant_unknown_named", sim("--variant", "nope"), 2, "'nope'", "valid choices")
 add(F, "ali3p_without_step", sim("--integrator", "ALI3P"), 2, "--integrator ALI3P", "fixed-step", "--step")
 add(F, "ali3p_with_default_exact_friction", sim("--integrator", "ALI3P", "--step", "0.001"), 2,

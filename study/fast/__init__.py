@@ -29,7 +29,7 @@ frontend
 
 from study.fast import cache as _cache  # noqa: F401  (sets numba's cache folder before any kernel is defined)
 
-__all__ = ["CompiledModel", "compiled_model", "simulate_compiled"]
+__all__ = ["CompiledModel", "check_supported", "compiled_model", "compiled_rhs", "simulate_compiled"]
 
 
 def __getattr__(name: str):

@@ -275,3 +275,10 @@ def accelerations_entry(evaluate, bias, t, q, qd, mode, p, lp, ci, cf, out, repe
             out[m + r + j] = ws.normal[j]
             out[m + r + nc + j] = ws.f[j]
     return status
+
+
+@njit(types.int64(EVALUATE_T, BIAS_T, f8, V1, I1, V1, V1, I1, V1, V1), cache=True)
+def rhs_entry(evaluate, bias, t, y, mode, p, lp, ci, cf, dy):
+    """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators; returns a status code."""
+    m, r, nc, nw = dimensions(ci)
+    return rhs(evaluate, bias, t, y, mode, p, lp, ci, cf, workspace(m, r, nc, nw), dy)

@@ -19,13 +19,18 @@ from dataclasses import dataclass
 from types import ModuleType, SimpleNamespace
 
 import numpy as np
+from numba import types
+from numba.core.types.function_type import WrapperAddressProtocol
+from numba.core.typing.typeof import typeof_impl
+from numba.experimental.function_type import _get_wrapper_address
 
 from study.errors import NonFiniteError, RunBoundError
 from study.fast.codegen import generated_module
 from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
-                                 accelerations_entry)
+                                 accelerations_entry, rhs_entry)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
                              FAIL_STALL, FAIL_STEP, integrate_segment)
+from study.fast.signatures import BIAS, EVALUATE
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
 from study.params import ParameterSet
@@ -126,11 +131,16 @@ def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_wo
     return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
 
 
-def check_supported(integrator: str, acceleration_solver: str, progress) -> None:
-    """ValueError naming every option the compiled backend does not support."""
+def check_supported(integrator: str, acceleration_solver: str, progress=None) -> None:
+    """ValueError naming every option the compiled backend does not support.
+
+    The integrators of the compiled loop (``SUPPORTED_INTEGRATORS``) and, with scipy's loop on compiled
+    evaluations (``study.simulate.SCIPY_STEPS_ONLY``), Radau and LSODA; ``progress`` only on scipy's loop."""
+    from study.simulate import SCIPY_STEPS_ONLY
+
     problems = []
-    if integrator not in SUPPORTED_INTEGRATORS:
-        problems.append(f"integrator={integrator!r} (compiled: {', '.join(SUPPORTED_INTEGRATORS)})")
+    if integrator not in (*SUPPORTED_INTEGRATORS, *SCIPY_STEPS_ONLY):
+        problems.append(f"integrator={integrator!r} (compiled: {', '.join((*SUPPORTED_INTEGRATORS, *SCIPY_STEPS_ONLY))})")
     if acceleration_solver not in SUPPORTED_ACCELERATION_SOLVERS:
         problems.append(f"acceleration_solver={acceleration_solver!r} (compiled: "
                         f"{', '.join(SUPPORTED_ACCELERATION_SOLVERS)})")
@@ -159,10 +169,16 @@ def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str,
     """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays.
 
     ``ps`` None: a user's equations, whose callables are compiled as they are (:func:`user_model`)."""
-    model = user_model(eom) if ps is None else compiled_model(ps)
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
                                         **method_options)
+    model, ci, cf = _pack(eom, ps, dyn)
+    return Setup(model, dyn, ci, cf, y0, switching, model.n_load_indicators, compiled_bias(dyn.stabilization))
+
+
+def _pack(eom: EquationsOfMotion, ps: ParameterSet | None, dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
+    """The compiled model of the equations and the option arrays of the reference dynamics ``dyn``."""
+    model = user_model(eom) if ps is None else compiled_model(ps)
     n_load = model.n_load_indicators
     if dyn.work_names != model.work_names:
         raise ValueError(f"backend='compiled': the loads {dyn.work_names} of the equations differ from the compiled "
@@ -171,8 +187,54 @@ def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str,
     if law is not None and dyn.n_load_modes != n_load:
         raise ValueError(f"backend='compiled': {dyn.n_load_modes} load switching functions in the equations, "
                          f"{n_load} in the compiled description")
-    ci, cf = pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load)
-    return Setup(model, dyn, ci, cf, y0, switching, n_load, compiled_bias(dyn.stabilization))
+    return (model, *pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load))
+
+
+class FunctionAddress(WrapperAddressProtocol):
+    """A compiled function passed from Python as a first-class function, at the cost of a pointer.
+
+    Passing the numba dispatcher itself makes every call look its signature up again (~100 us); this holds
+    the address of its compiled wrapper and its numba type (registered with ``typeof`` below)."""
+
+    def __init__(self, dispatcher, signature):
+        self._signature, self.numba_type = signature, types.FunctionType(signature)
+        self._address = _get_wrapper_address(dispatcher, signature)
+
+    def __wrapper_address__(self) -> int:
+        return self._address
+
+    def signature(self):
+        return self._signature
+
+
+@typeof_impl.register(FunctionAddress)
+def _typeof_function_address(value: FunctionAddress, context):
+    return value.numba_type
+
+
+def compiled_rhs(eom: EquationsOfMotion, ps: ParameterSet | None, dyn: Dynamics):
+    """``dyn.rhs`` evaluated by the compiled kernels, for scipy's integrators (Radau, LSODA) on the reference loop.
+
+    Same signature (t, y, mode) and the same count of evaluations in ``dyn.nfev``. Where the compiled solve fails,
+    the reference ``dyn.rhs`` is evaluated at that state so that its error (singular system, Painleve case) is
+    the one raised; if the reference succeeds there, the disagreement itself is raised."""
+    model, ci, cf = _pack(eom, ps, dyn)
+    evaluate, bias = FunctionAddress(model.module.evaluate, EVALUATE), FunctionAddress(compiled_bias(dyn.stabilization), BIAS)
+    p, lp = model.p, model.lp
+    no_mode = np.zeros(0, dtype=np.int64)
+
+    def rhs(t: float, y: np.ndarray, mode=None) -> np.ndarray:
+        dyn.nfev += 1
+        dy = np.empty(y.size)
+        status = rhs_entry(evaluate, bias, float(t), np.ascontiguousarray(y, dtype=float),
+                           no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy)
+        if status != 0:
+            dyn.rhs(t, y, mode)
+            raise RuntimeError(f"compiled acceleration solve failed at t = {t:.9g} s ({_FAILURES[FAIL_RHS]}) "
+                               f"where the reference solve succeeds; rerun with backend='reference'")
+        return dy
+
+    return rhs
 
 
 def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.ndarray:
@@ -283,10 +345,7 @@ def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, 
     if s.switching is not None:
         result.stats["friction_transitions"] = s.switching.transitions
     law = s.dyn.law if isinstance(s.dyn, FrictionDynamics) else None
-    result.meta.update({
-        **run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
-                       acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
-                       stabilization=s.dyn.stabilization, law=law),
-        "backend": "compiled",
-    })
+    result.meta.update(run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
+                                    acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
+                                    stabilization=s.dyn.stabilization, law=law, backend="compiled"))
     return result

@@ -96,16 +96,21 @@ def backend_cpu(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
 
     The twin runs a shorter horizon (study.pipeline.cases.sample_horizon); ``reference_cpu_scaled_s`` is its
     CPU scaled to the case's horizon (CPU is linear in simulated time, bench_linearity_deviation), and
-    ``compiled_over_reference`` compares CPU per simulated second.
+    ``compiled_over_reference`` compares CPU per simulated second. ``steps``: who takes the compiled case's
+    steps, the compiled loop ('compiled loop') or scipy on compiled evaluations ('scipy', study.simulate.SCIPY_STEPS_ONLY).
     """
+    from study.simulate import SCIPY_STEPS_ONLY
+
     rows = []
     for cl in case_lists:
         for case, twin in cl.samples:
             if store.has(case) and store.has(twin):
                 fast, ref = (float(store.load(c).stats["cpu_seconds"]) for c in (case, twin))
                 scaled = ref * case.t_end / twin.t_end
-                rows.append({"study": cl.study, "case": case.name, "t_end": case.t_end, "compiled_cpu_s": fast,
+                steps = "scipy" if case.kwargs.get("integrator") in SCIPY_STEPS_ONLY else "compiled loop"
+                rows.append({"study": cl.study, "case": case.name, "steps": steps, "t_end": case.t_end,
+                             "compiled_cpu_s": fast,
                              "reference_t_end": twin.t_end, "reference_cpu_s": ref, "reference_cpu_scaled_s": scaled,
                              "compiled_over_reference": fast / scaled if scaled > 0 else np.nan})
-    return pd.DataFrame(rows, columns=["study", "case", "t_end", "compiled_cpu_s", "reference_t_end", "reference_cpu_s",
-                                       "reference_cpu_scaled_s", "compiled_over_reference"])
+    return pd.DataFrame(rows, columns=["study", "case", "steps", "t_end", "compiled_cpu_s", "reference_t_end",
+                                       "reference_cpu_s", "reference_cpu_scaled_s", "compiled_over_reference"])

@@ -349,8 +349,8 @@ def diagnose_dynamics(dyn, t: float, q: Array, qd: Array, mode=None, potential: 
 class RunGuard:
     """The right-hand side of a run with its checks: finite output, an evaluation bound, singular systems.
 
-    Wraps ``dyn.rhs`` (a :class:`study.solver.dynamics.Dynamics`). Every call costs one dtype test and one
-    ``np.isfinite(...).all()`` on the output; the diagnosis (which quantity, why) is made only once something
+    Wraps ``dyn.rhs`` (a :class:`study.solver.dynamics.Dynamics`), or ``rhs`` that evaluates the same (the
+    compiled kernels). Every call costs one dtype test and one ``np.isfinite(...).all()`` on the output; the diagnosis (which quantity, why) is made only once something
     is non-finite or complex, or an exception came out of the evaluation: an exception raised by (or caused
     by the output of) a user's callable becomes a :class:`study.errors.UserFunctionError` naming the callable
     and the time, complex values a NonFiniteError (see :func:`diagnose_equations`); an exception no callable
@@ -358,8 +358,9 @@ class RunGuard:
     """
 
     def __init__(self, dyn, monitor: SingularityMonitor | None, max_evaluations: float,
-                 fixed_step: float | None = None, t_end: float | None = None):
+                 fixed_step: float | None = None, t_end: float | None = None, rhs=None):
         self.dyn, self.monitor = dyn, monitor
+        self.rhs = dyn.rhs if rhs is None else rhs
         self.max_evaluations, self.fixed_step = max_evaluations, fixed_step
         # an adaptive run's pace (a fixed-step run's cost is known, and refused, before it starts)
         self.budget = (Budget(t_end, max_evaluations) if t_end is not None and fixed_step is None
@@ -375,7 +376,7 @@ class RunGuard:
         if self.budget is not None:
             self.budget.update(dyn.nfev, t, dyn.eom.name, self._law_note())
         try:
-            out = dyn.rhs(t, y, mode)
+            out = self.rhs(t, y, mode)
         except np.linalg.LinAlgError as exc:
             q = y[:dyn.m]
             error = self._diagnose(t, y, mode)  # a wrong shape can make a solve fail too

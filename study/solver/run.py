@@ -58,10 +58,12 @@ def output_times(t_end: float, output_step: float) -> np.ndarray:
 
 
 def run_metadata(eom: EquationsOfMotion, ps, *, integrator: str, rtol: float, atol: float, step: float | None,
-                 acceleration_solver: str, output_step: float, t_end: float, stabilization, law) -> dict:
+                 acceleration_solver: str, output_step: float, t_end: float, stabilization, law,
+                 backend: str = "reference") -> dict:
     """The settings of an in-house run, as stored in ``SimulationResult.meta`` (both backends)."""
     return {
         "engine": "in-house",
+        "backend": backend,
         "mechanism": ps.mechanism if ps else eom.name,
         "variant": ps.variant if ps else None,
         "parameter_hash": ps.sha256 if ps else eom.parameter_hash,

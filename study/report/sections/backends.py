@@ -48,8 +48,10 @@ def section(ctx: ReportContext) -> list[str]:
                   "run.", ""]
     cpu = ctx.table("backend_cpu_timing")
     if cpu is not None and len(cpu):
-        r = cpu["compiled_over_reference"]
-        lines += [f"CPU on this machine (`timing/backend_cpu_timing.csv`): the compiled run takes {fmt_number(r.min())} "
-                  f"… {fmt_number(r.max())} of the reference path's CPU per simulated second (median "
-                  f"{fmt_number(r.median())}) over the {len(cpu)} pairs.", ""]
+        parts = [f"{fmt_number(r.min())} … {fmt_number(r.max())} (median {fmt_number(r.median())}) over the {len(r)} "
+                 f"pairs {where}" for steps, where in (("compiled loop", "in the compiled loop"),
+                                                       ("scipy", "where scipy takes the steps (Radau, LSODA)"))
+                 if len(r := cpu.loc[cpu["steps"] == steps, "compiled_over_reference"])]
+        lines += ["CPU on this machine (`timing/backend_cpu_timing.csv`): the compiled run takes "
+                  + "; ".join(parts) + " of the reference path's CPU per simulated second.", ""]
     return lines
