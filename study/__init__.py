@@ -2,7 +2,7 @@
 
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError, RunTooLargeError,
                           SimulationError, SingularConfigurationError)
-from study.mechanisms import consistent_state, equations_of
+from study.mechanisms import Mechanism, consistent_state, equations_of
 from study.model import EquationsOfMotion, MechanismBuilder, SlidingContact
 from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterError, ParameterSet, load_parameters
@@ -16,6 +16,7 @@ __all__ = [
     "EquationsError",
     "EquationsOfMotion",
     "Friction",
+    "Mechanism",
     "MechanismBuilder",
     "NonFiniteError",
     "ParameterError",
@@ -29,7 +30,26 @@ __all__ = [
     "SlidingContact",
     "consistent_state",
     "equations_of",
+    "exudyn_run",
+    "joint_reactions",
+    "load_mechanism",
     "load_parameters",
     "simulate",
     "simulate_methods",
+    "validate",
+    "ValidationSettings",
 ]
+
+# Imported when first used: Exudyn (and the report's plotting) load only for what needs them.
+_LAZY = {"exudyn_run": ("study.exudyn_models", "run"), "joint_reactions": ("study.reactions", "joint_reactions"),
+         "validate": ("study.validation", "validate"), "ValidationSettings": ("study.validation", "Settings"),
+         "load_mechanism": ("study.validation", "load_mechanism")}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        return getattr(importlib.import_module(module), attr)
+    raise AttributeError(f"module 'study' has no attribute {name!r}")

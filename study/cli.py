@@ -26,6 +26,7 @@ EXAMPLES = {
     "bench": "python -m study bench --quick --out /tmp/bench",
     "verify": "python -m study verify work_precision --perturb",
     "describe": "python -m study describe quick_return --variant guide_friction",
+    "validate": "python -m study validate examples/scotch_yoke/scotch_yoke.py --t-end 1 --out /tmp/yoke",
 }
 
 
@@ -139,7 +140,23 @@ def _simulate(args: argparse.Namespace) -> int:
 def _describe(args: argparse.Namespace) -> int:
     from study.describe import describe_text
 
-    print(describe_text(args.mechanism, args.variant))
+    if args.mechanism.endswith(".py"):
+        from study.validation import load_mechanism
+
+        print(describe_text(load_mechanism(args.mechanism, args.variant)))
+    else:
+        print(describe_text(args.mechanism, args.variant))
+    return 0
+
+
+def _validate(args: argparse.Namespace) -> int:
+    from study.validation import Settings, load_mechanism, validate
+
+    settings = Settings(**{k: getattr(args, k) for k in ("t_end", "output_step", "h", "levels", "friction_eps")
+                           if getattr(args, k) is not None})
+    out = args.out or Path("validation") / Path(args.file).stem
+    _writable(out, "--out", folder=True)
+    validate(load_mechanism(args.file, args.variant), settings, out, say=lambda text: print(text, file=sys.stderr))
     return 0
 
 
@@ -267,10 +284,20 @@ def _reproduce(args: argparse.Namespace) -> int:
             errata.kill()
             return code
     print("wall time per stage (errata alongside initial and run): "
-          + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items()), file=sys.stderr)
+          + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items())
+          + f"; this host's pace now: {_evaluation_us():.2f} us per compiled quick-return evaluation "
+            "(the README's times are for about 1 us)", file=sys.stderr)
     print(f"(details per study: {record_root / PIPELINE_RECORD})", file=sys.stderr)
     print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
     return code
+
+
+def _evaluation_us() -> float:
+    """µs of one compiled quick-return acceleration evaluation (the benchmark's acceleration_evaluation row), timed
+    now: the pace of this host, for reading the stages' wall times."""
+    from study.bench.evaluations import eval_cost_us
+
+    return eval_cost_us("quick_return", "smooth_cutting", {}, 5, 20000)
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -338,7 +365,8 @@ def build_parser() -> argparse.ArgumentParser:
     defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
 
     p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
-    p.add_argument("mechanism", choices=list(available_mechanisms()))
+    p.add_argument("mechanism", help=f"a study mechanism ({', '.join(available_mechanisms())}) or your own "
+                                     f"mechanism's .py file (describe(ps), its parameters in a .toml beside it)")
     p.add_argument("--variant", "--case", dest="variant", default="seed",
                    help="parameter-set variant (default: seed; --case is an alias)")
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
@@ -370,9 +398,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("describe", help="print a mechanism's bodies, joints, loads, variants and consistent initial state")
-    p.add_argument("mechanism", choices=list(available_mechanisms()))
+    p.add_argument("mechanism", help=f"a study mechanism ({', '.join(available_mechanisms())}) or your own "
+                                     f"mechanism's .py file (describe(ps), its parameters in a .toml beside it)")
     p.add_argument("--variant", "--case", dest="variant", default="seed", help="parameter-set variant (default: seed)")
     p.set_defaults(func=_describe)
+
+    p = sub.add_parser("validate", help="run your own mechanism (describe(ps) in a .py file, its parameters in a "
+                                        ".toml beside it) through every in-house method and Exudyn; write a report")
+    p.add_argument("file", type=Path, help="the mechanism's Python file")
+    p.add_argument("--variant", default="seed", help="parameter-set variant (default: seed)")
+    p.add_argument("--t-end", dest="t_end", type=float, default=None, help="horizon [s] (default 1)")
+    p.add_argument("--output-step", dest="output_step", type=float, default=None, help="sample spacing [s] (default 0.01)")
+    p.add_argument("--h", type=float, default=None, help="Exudyn's largest step [s], then h/2, h/4 (default 2e-3)")
+    p.add_argument("--levels", type=int, default=None, help="number of Exudyn steps halving from --h (default 3)")
+    p.add_argument("--friction-eps", dest="friction_eps", type=float, default=None,
+                   help="width of the regularized friction law compared with Exudyn [m/s] (default 1e-3)")
+    p.add_argument("--out", type=Path, default=None, help="report folder (default validation/<file name>)")
+    p.set_defaults(func=_validate)
 
     from study.bench.command import add_arguments as bench_arguments
 

@@ -12,6 +12,7 @@ import numpy as np
 import sympy as sp
 
 from study import mechanisms
+from study.mechanisms import Mechanism
 from study.model.coordinates import joint_rows, poses
 from study.model.joints import Description, Prismatic
 from study.params import ParameterSet, available_variants, load_parameters
@@ -32,15 +33,16 @@ def _point(ref: tuple[str, str]) -> str:
     return f"{ref[0]}.{ref[1]}"
 
 
-def describe_text(name: str, variant: str = "seed") -> str:
-    """The description of mechanism ``name`` (variant ``variant``) as a plain-text page."""
-    ps = load_parameters(name, variant)
-    d = mechanisms.description(ps)
-    d.validate()
+def describe_text(mechanism: str | Mechanism, variant: str = "seed") -> str:
+    """A mechanism's description as a plain-text page: a study mechanism by name (variant ``variant``), or a
+    :class:`study.Mechanism` (its own parameter set)."""
+    mech = mechanisms.mechanism(load_parameters(mechanism, variant)) if isinstance(mechanism, str) else mechanism
+    ps, d = mech.parameters, mech.description
+    name, variant, folder = ps.mechanism, ps.variant, ps.path.parent
     show = _readable(d)
     lines = [f"{name}: {d.label}", f"parameters: {ps.path} (variant {variant}: {ps.variant_note or 'no note'})", ""]
-    unit = mechanisms.coordinate_unit(name)
-    lines.append(f"relative coordinates q: {', '.join(d.coordinate_names)} [{unit}]")
+    unit = f" [{mechanisms.coordinate_unit(name)}]" if isinstance(mechanism, str) else ""
+    lines.append(f"relative coordinates q: {', '.join(d.coordinate_names)}{unit}")
     lines += ["", "parameters:"]
     lines += [f"  {k} = {_number(ps, k)}" for k in d.values]
     lines += ["", "bodies (points in the body's centre-of-mass frame):"]
@@ -80,15 +82,15 @@ def describe_text(name: str, variant: str = "seed") -> str:
     if lines[-1] == "loads:":
         lines.append("  none")
     lines += ["", "variants:"]
-    seed = load_parameters(name)
-    for v in available_variants(name):
-        other = load_parameters(name, v)
+    seed = load_parameters(name, reference_dir=folder)
+    for v in available_variants(name, folder):
+        other = load_parameters(name, v, reference_dir=folder)
         changed = [f"{k} = {_number(other, k)}" for k in d.values if getattr(other.values, k) != getattr(seed.values, k)]
         changed += [f"{k} = {getattr(other.values, k)!r}" for k in vars(seed.values)
                     if k not in d.values and getattr(other.values, k) != getattr(seed.values, k)]
         lines.append(f"  {v}: {other.variant_note or 'no note'}" + (f" [{'; '.join(changed)}]" if changed else ""))
     lines += ["", f"consistent initial state ({variant}):"]
-    state = mechanisms.initial_state(ps)
+    state = mech.initial_state()
     lines.append(f"  q(0)  = {_vector(state.q)}  ({', '.join(d.coordinate_names)})")
     lines.append(f"  qd(0) = {_vector(state.qd)}")
     lines.append(f"  max|Phi| = {state.phi_residual:.2e}, max|Phi_q qd| = {state.velocity_residual:.2e}; "

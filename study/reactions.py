@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from study import mechanisms
+from study.mechanisms import Mechanism, as_mechanism
 from study.model.joints import Prismatic, Revolute
 from study.params import ParameterSet
 from study.results import SimulationResult
@@ -44,17 +44,19 @@ def _absolute(bodies, f, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array,
     return np.array(x, dtype=float), np.array(xd, dtype=float), np.array(xdd, dtype=float)
 
 
-def absolute_state(ps: ParameterSet, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array, Array]:
+def absolute_state(mechanism: Mechanism | ParameterSet, q: Array, qd: Array, qdd: Array) -> tuple[Array, Array, Array]:
     """(x, xd, xdd) of every body (x, y, theta per body, description order) from relative coordinates."""
-    return _absolute(mechanisms.description(ps).bodies, mechanisms.equations(ps).kinematics, q, qd, qdd)
+    mech = as_mechanism(mechanism)
+    return _absolute(mech.description.bodies, mech.equations().kinematics, q, qd, qdd)
 
 
-def joint_reactions(ps: ParameterSet, result: SimulationResult) -> dict[str, Array]:
+def joint_reactions(mechanism: Mechanism | ParameterSet, result: SimulationResult) -> dict[str, Array]:
     """Reactions of every joint at every sample of an in-house result (see the module docstring).
 
     Parameters
     ----------
-    ps : the result's parameter set
+    mechanism : the result's Mechanism (a description with its parameter set), or a study mechanism's
+        parameter set
     result : SimulationResult in the description's relative coordinates (q, qd, qdd; the contacts'
         ``friction_<name>`` forces when friction was on)
 
@@ -62,9 +64,10 @@ def joint_reactions(ps: ParameterSet, result: SimulationResult) -> dict[str, Arr
     -------
     dict name -> (N,) array
     """
-    d = mechanisms.description(ps)
-    eom = mechanisms.equations(ps, "absolute")
-    kinematics = mechanisms.equations(ps).kinematics
+    mech = as_mechanism(mechanism)
+    d = mech.description
+    eom = mech.equations("absolute")
+    kinematics = mech.equations().kinematics
     rows = {name: i for i, name in enumerate(eom.constraint_names)}
     contacts = {c.name: c for c in eom.contacts}
     n = len(result.t)

@@ -43,21 +43,27 @@ SCIPY_STEPS_ONLY = ("Radau", "LSODA")
 
 
 def resolve(eom_or_mechanism, variant: str | None):
-    """An EquationsOfMotion, or a built-in mechanism name (with its variant) -> (eom, params or None)."""
-    if isinstance(eom_or_mechanism, EquationsOfMotion):
-        if variant is not None:
-            raise ValueError("variant= applies to built-in mechanism names, not to an EquationsOfMotion")
-        return eom_or_mechanism, None
-    if isinstance(eom_or_mechanism, str):
-        from study.mechanisms import load
+    """An EquationsOfMotion, a Mechanism (a description with its parameter set) or a built-in mechanism name (with
+    its variant) -> (eom, mechanism or None)."""
+    from study.mechanisms import Mechanism, mechanism
+    from study.params import load_parameters
 
-        ps, eom = load(eom_or_mechanism, variant or "seed")
-        return eom, ps
-    raise ValueError(f"eom_or_mechanism = {eom_or_mechanism!r} must be an EquationsOfMotion or a mechanism name")
+    if isinstance(eom_or_mechanism, (EquationsOfMotion, Mechanism)) and variant is not None:
+        raise ValueError(f"variant= applies to built-in mechanism names, not to a {type(eom_or_mechanism).__name__} "
+                         f"(its parameter set is its own)")
+    if isinstance(eom_or_mechanism, EquationsOfMotion):
+        return eom_or_mechanism, None
+    if isinstance(eom_or_mechanism, Mechanism):
+        return eom_or_mechanism.equations(), eom_or_mechanism
+    if isinstance(eom_or_mechanism, str):
+        m = mechanism(load_parameters(eom_or_mechanism, variant or "seed"))
+        return m.equations(), m
+    raise ValueError(f"eom_or_mechanism = {eom_or_mechanism!r} must be an EquationsOfMotion, a Mechanism or a "
+                     f"mechanism name")
 
 
 def simulate(
-    eom_or_mechanism: EquationsOfMotion | str,
+    eom_or_mechanism,
     q0=None,
     qd0=None,
     t_end: float = 1.0,
@@ -86,9 +92,10 @@ def simulate(
 
     Parameters
     ----------
-    eom_or_mechanism : EquationsOfMotion or str
-        A user's equations, or 'slider_crank' / 'quick_return' (then ``variant`` selects the parameter
-        set, default 'seed', and q0, qd0 default to its consistent initial state).
+    eom_or_mechanism : EquationsOfMotion, Mechanism or str
+        A user's equations; a :class:`study.Mechanism` (a description with its parameter set: q0, qd0 default
+        to its consistent initial state); or a study mechanism's name, e.g. 'slider_crank' (then ``variant``
+        selects the parameter set, default 'seed', and q0, qd0 default to its consistent initial state).
     q0, qd0 : (m,) array_like
         Initial state; it should satisfy the constraints (see ``study.solver.initial``).
     t_end : float
@@ -169,7 +176,8 @@ def simulate(
     friction_sgn = "tanh" if friction_sgn is None else friction_sgn
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
-    eom, ps = resolve(eom_or_mechanism, variant)
+    eom, mech = resolve(eom_or_mechanism, variant)
+    ps = None if mech is None else mech.parameters
     index3 = integrator == INDEX3
     if index3 and eom.indicators is not None:
         raise ValueError(f"integrator 'ALI3P' does not locate the switches of {eom.name}'s discontinuous loads "
@@ -184,11 +192,9 @@ def simulate(
     max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
     max_output_bytes = tolerance("max_output_bytes") if max_output_bytes is None else max_output_bytes
     if q0 is None or qd0 is None:
-        if ps is None:
+        if mech is None:
             raise ValueError("q0 and qd0 are required for a user's EquationsOfMotion")
-        from study.mechanisms import initial_state
-
-        state = initial_state(ps, eom)
+        state = mech.initial_state()
         q0 = state.q if q0 is None else q0
         qd0 = state.qd if qd0 is None else qd0
     names = eom.coordinate_names
@@ -211,7 +217,7 @@ def simulate(
     if not scipy_steps:
         from study.fast import simulate_compiled
 
-        return simulate_compiled(eom, ps, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
+        return simulate_compiled(eom, mech, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
                                  step=step, output_step=output_step, acceleration_solver=acceleration_solver,
                                  progress=progress, friction=friction, friction_eps=friction_eps,
                                  friction_sgn=friction_sgn, max_evaluations=max_evaluations, min_step=min_step,
@@ -247,7 +253,7 @@ def simulate(
         from study.fast import check_supported, compiled_rhs
 
         check_supported(integrator, acceleration_solver)
-        rhs = compiled_rhs(eom, ps, dyn)
+        rhs = compiled_rhs(eom, mech, dyn)
     guard = RunGuard(dyn, monitor, max_evaluations, step if integrator in FIXED_STEP else None, float(t_end), rhs)
     cpu0 = time.process_time()
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the guard reports non-finite values

@@ -4,6 +4,7 @@ import functools
 import importlib
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -167,4 +168,12 @@ def test_describe_lists_variants_with_their_changes(capsys):
 
 def test_describe_unknown_mechanism_names_the_choices():
     proc = subprocess.run([sys.executable, "-m", "study", "describe", "pendulum"], capture_output=True, text=True)
-    assert proc.returncode == 2 and "invalid choice: 'pendulum'" in proc.stderr and "four_bar" in proc.stderr
+    assert proc.returncode == 2 and "unknown mechanism 'pendulum'" in proc.stderr and "four_bar" in proc.stderr
+
+
+def test_describe_takes_a_users_mechanism_file():
+    """A user's file (describe(ps) and a parameter file beside it) is described like a study mechanism."""
+    path = Path(__file__).resolve().parents[1] / "examples" / "scotch_yoke" / "scotch_yoke.py"
+    proc = subprocess.run([sys.executable, "-m", "study", "describe", str(path)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "rail: prismatic" in proc.stdout and "by the travel x" in proc.stdout and "q(0)" in proc.stdout

@@ -9,7 +9,7 @@ import pytest
 
 from handwritten import cartesian_pendulum
 from study.fast import frontend
-from study.mechanisms import initial_state, load
+from study.mechanisms import initial_state, load, mechanism as mechanism_of
 from study.reference_data import tolerance
 from study.simulate import simulate
 
@@ -19,7 +19,7 @@ RTOL, ATOL = 1e-10, 1e-12  # tight, so both paths are close to the exact solutio
 def _setup(mechanism, variant, method="none", friction=None, **options):
     ps, eom = load(mechanism, variant)
     st = initial_state(ps, eom)
-    s = frontend.setup(eom, ps, st.q, st.qd, method, friction, 1e-3, "tanh", **options)
+    s = frontend.setup(eom, mechanism_of(ps), st.q, st.qd, method, friction, 1e-3, "tanh", **options)
     return s, st
 
 

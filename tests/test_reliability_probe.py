@@ -190,7 +190,8 @@ add(L, "sgn_with_sign", lib(friction="sign", friction_sgn="sat", integrator="RK4
 add(L, "output_step_longer_than_horizon", lib(output_step=1.0), ValueError, "output_step = 1", "t_end = 0.05")
 add(L, "rk4_step_longer_than_horizon", lib(integrator="RK4", step=1.0), ValueError, "step = 1", "t_end = 0.05")
 add(L, "check_not_boolean", lib(check="no"), ValueError, "check = 'no'")
-add(L, "mechanism_number", lambda tmp: simulate(123), ValueError, "123", "EquationsOfMotion or a mechanism name")
+add(L, "mechanism_number", lambda tmp: simulate(123), ValueError, "123", "EquationsOfMotion, a Mechanism or a "
+    "mechanism name")
 add(L, "variant_not_text", lib(variant=1), ValueError, "variant = 1")
 add(L, "option_unknown", lib(method="baumgarte", omgea=10.0), ValueError, "omgea", "valid options")
 add(L, "option_for_none", lib(omega=10.0), ValueError, "omega", "method 'none'")

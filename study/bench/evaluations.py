@@ -20,14 +20,14 @@ def accel_costs(repeats: int, n_calls: int, mechanisms=None) -> pd.DataFrame:
     reference Python path, compiled (inside a compiled loop, i.e. the cost inside the integrator) and
     compiled called once from Python."""
     from study.fast import frontend
-    from study.mechanisms import initial_state, load
+    from study.mechanisms import initial_state, load, mechanism
 
     rows = []
     for mech in mechanisms or CASES:
         variant, _, extra = CASES[mech]
         ps, eom = load(mech, variant)
         st = initial_state(ps, eom)
-        s = frontend.setup(eom, ps, st.q, st.qd, "none", extra.get("friction"), EPS, "tanh")
+        s = frontend.setup(eom, mechanism(ps), st.q, st.qd, "none", extra.get("friction"), EPS, "tanh")
         fric = extra.get("friction") is not None
         ref = (lambda: s.dyn.contact_solution(0.1, st.q, st.qd)) if fric else (lambda: s.dyn.evaluate(0.1, st.q, st.qd))
         n_few = n_calls // 20
@@ -62,11 +62,11 @@ def eval_cost_us(mech: str, variant: str, extra: dict, repeats: int, n_calls: in
     """Median µs of one compiled acceleration evaluation inside a compiled loop (``n_calls`` per timing)
     at the initial state, in the mode the integration starts in: the cost unit of the loop overhead."""
     from study.fast import frontend
-    from study.mechanisms import initial_state, load
+    from study.mechanisms import initial_state, load, mechanism
 
     ps, eom = load(mech, variant)
     st = initial_state(ps, eom)
-    s = frontend.setup(eom, ps, st.q, st.qd, "none", extra.get("friction"), EPS, "tanh")
+    s = frontend.setup(eom, mechanism(ps), st.q, st.qd, "none", extra.get("friction"), EPS, "tanh")
     m = eom.n_coordinates
     mode = ()
     if s.n_load_modes:

@@ -21,7 +21,7 @@ from study.simulate import simulate
 def scaling(quick: bool) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """CPU against simulated time and output density; tracemalloc peak against output size."""
     from study.fast import frontend
-    from study.mechanisms import initial_state, load
+    from study.mechanisms import initial_state, load, mechanism
 
     few = repeats(quick)
     executed = []
@@ -36,7 +36,7 @@ def scaling(quick: bool) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
 
     ps, eom = load("quick_return", "smooth_cutting")
     st = initial_state(ps, eom)
-    s = frontend.setup(eom, ps, st.q, st.qd, "none", None, EPS, "tanh")
+    s = frontend.setup(eom, mechanism(ps), st.q, st.qd, "none", None, EPS, "tanh")
     rows, mem = [], []
     t_end = 5.0 if quick else 20.0
     for dt in (1.0, 0.1, 0.01, 0.001, 0.0001):

@@ -7,7 +7,6 @@ import time
 import exudyn as exu
 import numpy as np
 
-from study import mechanisms
 from study.results import SimulationResult, package_versions
 from study.exudyn_models.guards import GuideFriction, initialize, seed_reaction_guards
 from study.exudyn_models.building import Model
@@ -18,16 +17,17 @@ from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, IMPLICIT_S
 Array = np.ndarray
 
 
-# ``build(ps, q0, qd0, friction, eps)`` returns an object with ``model`` (Model), ``frictions``
+# ``build(mechanism, q0, qd0, friction, eps)`` returns an object with ``model`` (Model), ``frictions``
 # (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
 # ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
-def run_model(build, ps, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
+def run_model(build, mechanism, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
               eps: float, configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
-    """Build the model at the in-house consistent initial state, solve it, return its result."""
+    """Build the model of a :class:`study.mechanisms.Mechanism` at its in-house consistent initial state, solve it,
+    return its result."""
     grid = check_arguments(t_end, h, solver, output_step, friction, eps, configuration)
-    eom = mechanisms.equations(ps)
-    state0 = mechanisms.initial_state(ps, eom)
-    built = build(ps, state0.q, state0.qd, friction, eps, configuration)
+    eom = mechanism.equations()
+    state0 = mechanism.initial_state()
+    built = build(mechanism, state0.q, state0.qd, friction, eps, configuration)
     settings = simulation_settings(grid, solver, built.loads_jacobian, configuration, ignore_singular)
     stats = {"configuration": configuration}
     if solver in IMPLICIT_SOLVERS:
@@ -36,10 +36,10 @@ def run_model(build, ps, t_end: float, h: float, solver: str, output_step: float
     return built.result(eom, grid, solver, stats)
 
 
-def initial_accelerations(build, ps, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
+def initial_accelerations(build, mechanism, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
     """Accelerations and multipliers at a state, from Exudyn's solver initialization alone."""
     check_arguments(1.0, 1.0, "index3", None, friction, eps)
-    built = build(ps, q, qd, friction, eps)
+    built = build(mechanism, q, qd, friction, eps)
     settings = simulation_settings(RunGrid(1.0, 1.0, 1, 1), "index3", built.loads_jacobian)
     seed_reaction_guards(built.model, settings, built.frictions)
     return initialize(built.model, settings, built.initial_values)

@@ -1,9 +1,9 @@
 """The Exudyn model of any joint-level description (:class:`study.model.joints.Description`).
 
 No mechanism is named here: bodies, joints, loads, friction and the result mapping are all read from
-the description returned by :func:`study.mechanisms.description`. One concept, the translation of a
-description into an Exudyn model and back into a result, hence its length; the run settings, model
-building blocks, reaction guards and solving it uses are in the sibling modules.
+the description of a :class:`study.mechanisms.Mechanism` (a user's, or a study mechanism's). One concept,
+the translation of a description into an Exudyn model and back into a result, hence its length; the run
+settings, model building blocks, reaction guards and solving it uses are in the sibling modules.
 
 Model
 -----
@@ -43,9 +43,11 @@ Model
 
 Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
 ---------------------------------------------------------------------------
-* q: the body angles are linear in q (checked), theta = A q + c; q = q0 + A^+ (theta - theta0) with
+* q: where the body angles are linear in q with full rank, theta = A q + c; q = q0 + A^+ (theta - theta0) with
   A^+ the exact pseudo-inverse and theta - theta0 Exudyn's angle displacement (so q(0) = q0 exactly);
   qd, qdd = A^+ times the node angular velocities / accelerations (Exudyn's, not finite differences).
+  Otherwise (a translation coordinate) q solves pose(q) = Exudyn's body poses (x, y, theta of every body) by
+  Gauss-Newton, and qd, qdd follow through the pose Jacobian (Kinematics.coordinates).
 * lam, in ``eom.constraint_names`` order: a revolute row ``<J>_x/_y`` is the row r_a - r_b, so lam =
   the force of joint J on its second body b, global = -Exudyn 'Force' (the force on the marker-0
   body a). A prismatic gap row ``<J>`` = n . (r_s - r_g): the guide pushes the slider with -lam n, so
@@ -66,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from study import mechanisms
+from study.mechanisms import Mechanism, as_mechanism
 import study.exudyn_models.building as building
 import study.exudyn_models.settings as settings
 import study.exudyn_models.solve as solve
@@ -85,33 +87,65 @@ Array = np.ndarray
 # --------------------------------------------------------------------------------------------
 @dataclass
 class Kinematics:
-    """Body angles and COM velocities of the relative coordinates, and the angle map's pseudo-inverse."""
+    """Body poses of the relative coordinates, and the map from Exudyn's body poses back to q.
+
+    ``pinv`` is set when the body angles alone determine q (linear in q with full rank): q - q0 = pinv @
+    (theta - theta0). Otherwise (a translation coordinate of a prismatic tree joint) q is recovered from every
+    body's pose (x, y, theta) by Gauss-Newton (:meth:`coordinates`)."""
 
     d: Description
     subs: dict
     angle: dict           # body -> f(q) -> float
     angle_grad: dict      # body -> f(q) -> (m,) gradient
     com_jac: dict         # body -> f(q) -> (2, m)
-    pinv: Array           # (m, n_bodies): q - q0 = pinv @ (theta - theta0)
+    pinv: Array | None    # (m, n_bodies), or None
+    pose: object = None        # f(q) -> (3 n_bodies,) [x, y, theta of every body]
+    pose_jac: object = None    # f(q) -> (3 n_bodies, m)
+    pose_bias: object = None   # f(q, qd) -> (3 n_bodies,) d(J)/dt qd, so that acc = J qdd + bias
+
+    def coordinates(self, q0: Array, poses: Array, rates: Array, accelerations: Array) -> tuple[Array, Array, Array]:
+        """q, qd, qdd at every sample from the bodies' (n, 3 n_bodies) poses, rates and accelerations.
+
+        q: Gauss-Newton on pose(q) = pose, from the previous sample's q (q0 first); stopped at a step
+        <= POSE_TOL (1 + |q|), or refused (ValueError) after POSE_MAX_ITER iterations. qd, qdd: least squares
+        through the pose Jacobian, which has full column rank on a description whose bodies place q."""
+        n = len(poses)
+        q, qd, qdd = np.empty((n, len(q0))), np.empty((n, len(q0))), np.empty((n, len(q0)))
+        qk = np.array(q0, dtype=float)
+        for k in range(n):
+            for _ in range(POSE_MAX_ITER):
+                J = np.asarray(self.pose_jac(qk), dtype=float)
+                step = np.linalg.lstsq(J, poses[k] - np.asarray(self.pose(qk), dtype=float).ravel(), rcond=None)[0]
+                qk = qk + step
+                if np.abs(step).max() <= POSE_TOL * (1 + np.abs(qk).max()):
+                    break
+            else:
+                raise ValueError(f"{self.d.name}: q cannot be recovered from Exudyn's body poses at sample {k} "
+                                 f"(Gauss-Newton did not converge in {POSE_MAX_ITER} iterations)")
+            J = np.asarray(self.pose_jac(qk), dtype=float)
+            q[k] = qk
+            qd[k] = np.linalg.lstsq(J, rates[k], rcond=None)[0]
+            bias = np.asarray(self.pose_bias(qk, qd[k]), dtype=float).ravel()
+            qdd[k] = np.linalg.lstsq(J, accelerations[k] - bias, rcond=None)[0]
+        return q, qd, qdd
 
 
-_KINEMATICS: dict[str, Kinematics] = {}
+POSE_TOL, POSE_MAX_ITER = 1e-13, 30
+_KINEMATICS: dict[Mechanism, Kinematics] = {}
 
 
-def _kinematics(ps: ParameterSet) -> Kinematics:
-    """The description of ``ps`` and its bound kinematics (cached by the parameter set's hash)."""
-    if ps.sha256 not in _KINEMATICS:
-        _KINEMATICS[ps.sha256] = _make_kinematics(ps)
-    return _KINEMATICS[ps.sha256]
+def _kinematics(mech: Mechanism) -> Kinematics:
+    """The description of ``mech`` and its bound kinematics (kept per mechanism)."""
+    if mech not in _KINEMATICS:
+        _KINEMATICS[mech] = _make_kinematics(mech.description)
+    return _KINEMATICS[mech]
 
 
-def _make_kinematics(ps: ParameterSet) -> Kinematics:
-    d = mechanisms.description(ps)
-    d.validate()
+def _make_kinematics(d: Description) -> Kinematics:
     subs = {getattr(d.p, k): sp.Float(v) for k, v in d.values.items()}
     q = list(d.q)
     _, _, placed, _ = poses(d, "relative")
-    angle, grad, jac, rows = {}, {}, {}, []
+    angle, grad, jac, rows, pose = {}, {}, {}, [], []
     for b in d.bodies:
         r, th = placed[b]
         th = sp.sympify(th).xreplace(subs)
@@ -120,18 +154,26 @@ def _make_kinematics(ps: ParameterSet) -> Kinematics:
         grad[b] = sp.lambdify([q], g, "numpy")
         jac[b] = sp.lambdify([q], r.xreplace(subs).jacobian(q), "numpy")
         rows.append(g)
+        pose += [*r.xreplace(subs), th]
     a = sp.Matrix.vstack(*rows)
-    if a.free_symbols & set(q) or a.rank() != len(q):
-        raise ValueError(f"mechanism {d.name!r}: the Exudyn result needs body angles linear in q with full rank "
-                         f"(q recovered from the angles); angle Jacobian {a.tolist()}")
-    pinv = np.array(a.pinv().evalf(), dtype=float)
-    return Kinematics(d, subs, angle, grad, jac, pinv)
+    if not a.free_symbols & set(q) and a.rank() == len(q):
+        return Kinematics(d, subs, angle, grad, jac, np.array(a.pinv().evalf(), dtype=float))
+    qd = sp.symbols(f"qd0:{len(q)}")
+    P = sp.Matrix(pose)
+    JP = P.jacobian(q)
+    bias = (JP * sp.Matrix(qd)).jacobian(q) * sp.Matrix(qd)
+    if JP.subs({s: 0.1 * (i + 1) for i, s in enumerate(q)}).rank() != len(q):
+        raise ValueError(f"mechanism {d.name!r}: the bodies' poses do not determine its coordinates (pose Jacobian "
+                         f"of rank < {len(q)}), so an Exudyn result cannot be mapped back to them")
+    return Kinematics(d, subs, angle, grad, jac, None, sp.lambdify([q], P, "numpy"), sp.lambdify([q], JP, "numpy"),
+                      sp.lambdify([q, qd], bias, "numpy"))
 
 
-def body_states(ps: ParameterSet, q, qd) -> dict[str, BodyState]:
+def body_states(mech: Mechanism | ParameterSet, q, qd) -> dict[str, BodyState]:
     """COM position, angle and their rates of every body at (q, qd) through the description's kinematics."""
-    k = _kinematics(ps)
-    eom = mechanisms.equations(ps)
+    mech = as_mechanism(mech)
+    k = _kinematics(mech)
+    eom = mech.equations()
     q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
     out = {}
     for b in k.d.bodies:
@@ -289,7 +331,7 @@ def loads_jacobian(d: Description) -> int:
 
 @dataclass
 class Built:
-    ps: ParameterSet
+    mech: Mechanism
     d: Description
     kin: Kinematics
     model: Model
@@ -303,6 +345,7 @@ class Built:
     frictions_by_contact: dict = field(default_factory=dict)
     normals: dict = field(default_factory=dict)       # prismatic joint -> n in the guide's body frame
     q0: Array = None                                  # the relative coordinates of the reference configuration
+    qd0: Array = None                                 # and their rates
 
     @property
     def frictions(self) -> list[GuideFriction]:
@@ -332,10 +375,16 @@ class Built:
         return np.stack(cols, axis=-1)
 
     def initial_values(self) -> tuple[Array, Array]:
-        eom = mechanisms.equations(self.ps)
-        alpha = np.array([self.model.node_output(b, OVT.Coordinates_tt)[2] for b in self.d.bodies])
+        eom = self.mech.equations()
+        acc = np.array([self.model.node_output(b, OVT.Coordinates_tt) for b in self.d.bodies], dtype=float)
         outputs = {j.name: self.model.joint_output(j.name) for j in self.d.joints}
-        return self.kin.pinv @ alpha, self._lam(outputs, eom.constraint_names)
+        if self.kin.pinv is not None:
+            qdd = self.kin.pinv @ acc[:, 2]
+        else:
+            J = np.asarray(self.kin.pose_jac(self.q0), dtype=float)
+            bias = np.asarray(self.kin.pose_bias(self.q0, self.qd0), dtype=float).ravel()
+            qdd = np.linalg.lstsq(J, acc.ravel() - bias, rcond=None)[0]
+        return qdd, self._lam(outputs, eom.constraint_names)
 
     # --- result ----------------------------------------------------------------------------------
     def result(self, eom, grid: settings.RunGrid, solver: str, stats: dict) -> SimulationResult:
@@ -345,10 +394,14 @@ class Built:
         for b in d.bodies:
             pos[b], vel[b], acc[b] = self.model.body_series(b, grid)
             disp[b] = self.model.series((b, "coordinates"), grid)   # displacement from the reference
-        angles = lambda series: np.column_stack([series[b][:, 2] for b in d.bodies])  # noqa: E731
-        q = self.q0 + angles(disp) @ self.kin.pinv.T      # q(0) = q0 exactly (zero displacement)
-        qd = angles(vel) @ self.kin.pinv.T
-        qdd = angles(acc) @ self.kin.pinv.T
+        if self.kin.pinv is not None:
+            angles = lambda series: np.column_stack([series[b][:, 2] for b in d.bodies])  # noqa: E731
+            q = self.q0 + angles(disp) @ self.kin.pinv.T      # q(0) = q0 exactly (zero displacement)
+            qd = angles(vel) @ self.kin.pinv.T
+            qdd = angles(acc) @ self.kin.pinv.T
+        else:
+            poses_of = lambda series: np.hstack([series[b] for b in d.bodies])  # noqa: E731
+            q, qd, qdd = self.kin.coordinates(self.q0, poses_of(pos), poses_of(vel), poses_of(acc))
         outputs = {j.name: self.model.series((j.name, "force"), grid) for j in d.joints}
         lam = self._lam(outputs, eom.constraint_names)
         rows = list(eom.constraint_names)
@@ -416,7 +469,7 @@ class Built:
         if active:
             meta["work_friction"] = "work_friction_<c>: Coulomb plus resistance (the whole tangential guide force)"
         friction = self.friction if active else "none (no friction contact with mu_k > 0 or resistance > 0)"
-        return solve.assemble_result(eom, self.ps, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
+        return solve.assemble_result(eom, self.mech.parameters, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
                                       lam=lam, kinetic=kinetic, potential=potential, works=works, forces=forces,
                                       stats=stats, meta=meta)
 
@@ -458,21 +511,22 @@ class Built:
         return out
 
 
-def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
-          configuration: str = "python") -> Built:
-    """Assemble the Exudyn model of ``ps``'s description at the state (q0, qd0) (relative coordinates).
+def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regularized",
+          eps: float = settings.DEFAULT_EPS, configuration: str = "python") -> Built:
+    """Assemble the Exudyn model of a mechanism's description at the state (q0, qd0) (relative coordinates).
 
     ``configuration`` (settings.CONFIGURATIONS): 'python' evaluates every state-dependent law in a
     Python load user function; 'tuned' records it as an Exudyn symbolic user function where the law's
     inputs are those of the element carrying it (:func:`_symbolic_law`), else keeps the Python one, and
     leaves the numerical load Jacobian off unless a Python load remains that needs it (the friction).
     """
-    kin = _kinematics(ps)
+    mech = as_mechanism(mechanism)
+    kin = _kinematics(mech)
     d, subs = kin.d, kin.subs
     val = lambda e: float(sp.sympify(e).xreplace(subs))  # noqa: E731
     g = val(d.gravity_g) if d.gravity_g is not None else 0.0
     model = Model()
-    states = body_states(ps, q0, qd0)
+    states = body_states(mech, q0, qd0)
     for b, body in d.bodies.items():
         model.body(b, val(body.mass), val(body.inertia), states[b], g)
     refs = {b: states[b].angle for b in d.bodies}
@@ -484,8 +538,8 @@ def build(ps: ParameterSet, q0, qd0, friction: str = "regularized", eps: float =
             markers[(body, point)] = model.marker(body, (val(xy[0]), val(xy[1])))
         return markers[(body, point)]
 
-    built = Built(ps, d, kin, model, friction, eps, loads_jacobian(d), configuration)
-    built.q0 = np.asarray(q0, dtype=float).copy()
+    built = Built(mech, d, kin, model, friction, eps, loads_jacobian(d), configuration)
+    built.q0, built.qd0 = np.asarray(q0, dtype=float).copy(), np.asarray(qd0, dtype=float).copy()
     for j in d.joints:
         if isinstance(j, Revolute):
             model.revolute(j.name, marker(*j.a), marker(*j.b))
@@ -619,14 +673,14 @@ def _user_function(law: Law, read, torque: bool):
     return user
 
 
-def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
-        friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
+def run(mechanism: Mechanism | ParameterSet, t_end: float, h: float, solver: str = "index3",
+        output_step: float | None = None, friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
         configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
-    """Simulate a parameter set's mechanism in Exudyn from the in-house consistent initial state.
+    """Simulate a mechanism in Exudyn from the in-house consistent initial state.
 
     Parameters
     ----------
-    ps : ParameterSet
+    mechanism : study.Mechanism (a description with its parameter set), or a study mechanism's ParameterSet
     t_end : float
         End time [s], a whole number of steps.
     h : float
@@ -648,10 +702,11 @@ def run(ps: ParameterSet, t_end: float, h: float, solver: str = "index3", output
     -------
     SimulationResult (see the module docstring for the mapping of every quantity)
     """
-    return solve.run_model(build, ps, t_end, h, solver, output_step, friction, eps, configuration, ignore_singular)
+    return solve.run_model(build, as_mechanism(mechanism), t_end, h, solver, output_step, friction, eps, configuration,
+                           ignore_singular)
 
 
-def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized",
+def initial_accelerations(mechanism: Mechanism | ParameterSet, q, qd, friction: str = "regularized",
                           eps: float = settings.DEFAULT_EPS) -> tuple[Array, Array]:
     """Exudyn's accelerations and multipliers at a state (relative coordinates), from its solver
     initialization alone: the initial-acceleration solve SolveDynamic performs at t = 0 (with the seeded
@@ -662,4 +717,4 @@ def initial_accelerations(ps: ParameterSet, q, qd, friction: str = "regularized"
     qdd : (m,) array
     lam : (r,) array, in ``eom.constraint_names`` order
     """
-    return solve.initial_accelerations(build, ps, q, qd, friction, eps)
+    return solve.initial_accelerations(build, as_mechanism(mechanism), q, qd, friction, eps)

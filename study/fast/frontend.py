@@ -33,7 +33,8 @@ from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE
 from study.fast.signatures import BIAS, EVALUATE
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion
-from study.params import ParameterSet
+from study.mechanisms import Mechanism
+from study.model.coordinates import lower
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.assemble import assemble_result
@@ -73,7 +74,7 @@ class CompiledModel:
     work_names: tuple[str, ...]
 
 
-_MODELS: dict[tuple, CompiledModel] = {}
+_MODELS: dict[Mechanism, CompiledModel] = {}
 _USER_MODELS: dict[int, tuple[EquationsOfMotion, CompiledModel]] = {}   # id -> (the equations, kept alive; model)
 
 
@@ -86,18 +87,15 @@ def user_model(eom: EquationsOfMotion) -> CompiledModel:
     return _USER_MODELS[id(eom)][1]
 
 
-def compiled_model(ps: ParameterSet) -> CompiledModel:
-    """The compiled model of a described mechanism's parameter set (generated once, then from disk)."""
-    key = (ps.mechanism, ps.values)   # the values themselves: a replaced parameter set keeps its sha256
-    if key not in _MODELS:
-        from study.mechanisms import builder
-
-        b = builder(ps)
+def compiled_model(mechanism: Mechanism) -> CompiledModel:
+    """The compiled model of a mechanism's description in relative coordinates (generated once, then from disk)."""
+    if mechanism not in _MODELS:
+        b = lower(mechanism.description, "relative")
         b.validate()
         mod = generated_module(b)
         p = np.array([float(b.values[k]) for k in mod.PARAMETERS])
-        _MODELS[key] = CompiledModel(mod, p, np.zeros(0), mod.N_LOAD_INDICATORS, tuple(mod.WORK_NAMES))
-    return _MODELS[key]
+        _MODELS[mechanism] = CompiledModel(mod, p, np.zeros(0), mod.N_LOAD_INDICATORS, tuple(mod.WORK_NAMES))
+    return _MODELS[mechanism]
 
 
 def compiled_bias(stabilization: Stabilization):
@@ -164,21 +162,23 @@ class Setup:
     bias: object   # the stabilization's compiled_bias
 
 
-def setup(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
+def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
     """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays.
 
-    ``ps`` None: a user's equations, whose callables are compiled as they are (:func:`user_model`)."""
+    ``mechanism`` None: a user's equations, whose callables are compiled as they are (:func:`user_model`)."""
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
                                         **method_options)
-    model, ci, cf = _pack(eom, ps, dyn)
+    model, ci, cf = _pack(eom, mechanism, dyn)
     return Setup(model, dyn, ci, cf, y0, switching, model.n_load_indicators, compiled_bias(dyn.stabilization))
 
 
-def _pack(eom: EquationsOfMotion, ps: ParameterSet | None, dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
-    """The compiled model of the equations and the option arrays of the reference dynamics ``dyn``."""
-    model = user_model(eom) if ps is None else compiled_model(ps)
+def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
+          dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
+    """The compiled model of the equations (of ``mechanism``'s description, else of ``eom``'s callables) and the
+    option arrays of the reference dynamics ``dyn``."""
+    model = user_model(eom) if mechanism is None else compiled_model(mechanism)
     n_load = model.n_load_indicators
     if dyn.work_names != model.work_names:
         raise ValueError(f"backend='compiled': the loads {dyn.work_names} of the equations differ from the compiled "
@@ -212,13 +212,13 @@ def _typeof_function_address(value: FunctionAddress, context):
     return value.numba_type
 
 
-def compiled_rhs(eom: EquationsOfMotion, ps: ParameterSet | None, dyn: Dynamics):
+def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynamics):
     """``dyn.rhs`` evaluated by the compiled kernels, for scipy's integrators (Radau, LSODA) on the reference loop.
 
     Same signature (t, y, mode) and the same count of evaluations in ``dyn.nfev``. Where the compiled solve fails,
     the reference ``dyn.rhs`` is evaluated at that state so that its error (singular system, Painleve case) is
     the one raised; if the reference succeeds there, the disagreement itself is raised."""
-    model, ci, cf = _pack(eom, ps, dyn)
+    model, ci, cf = _pack(eom, mechanism, dyn)
     evaluate, bias = FunctionAddress(model.module.evaluate, EVALUATE), FunctionAddress(compiled_bias(dyn.stabilization), BIAS)
     p, lp = model.p, model.lp
     no_mode = np.zeros(0, dtype=np.int64)
@@ -329,13 +329,13 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     return t_out[:k].copy(), y_out[:k].copy(), modes, stats
 
 
-def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, t_end: float, *, method: str,
+def simulate_compiled(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, t_end: float, *, method: str,
                       integrator: str, rtol: float, atol: float, step, output_step: float,
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
                       max_evaluations: float, min_step: float, **method_options) -> SimulationResult:
     """The compiled backend of ``study.simulate.simulate`` (arguments already checked there)."""
     check_supported(integrator, acceleration_solver, progress)
-    s = setup(eom, ps, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
+    s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()
     t, y, modes, stats = run(s, float(t_end), t_out, integrator, rtol, atol, step, max_evaluations, min_step)
@@ -345,6 +345,7 @@ def simulate_compiled(eom: EquationsOfMotion, ps: ParameterSet | None, q0, qd0, 
     if s.switching is not None:
         result.stats["friction_transitions"] = s.switching.transitions
     law = s.dyn.law if isinstance(s.dyn, FrictionDynamics) else None
+    ps = None if mechanism is None else mechanism.parameters
     result.meta.update(run_metadata(eom, ps, integrator=integrator, rtol=rtol, atol=atol, step=step,
                                     acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
                                     stabilization=s.dyn.stabilization, law=law, backend="compiled"))

@@ -9,6 +9,7 @@ the Exudyn model and the joint reactions are all generated from the description.
 from __future__ import annotations
 
 import importlib
+from dataclasses import dataclass, field
 from types import ModuleType
 
 import numpy as np
@@ -70,20 +71,66 @@ def equations_of(d: Description, coordinates: str = "relative", parameter_hash: 
     return compile_description(lower(d, coordinates), parameter_hash)
 
 
+@dataclass(frozen=True, eq=False)
+class Mechanism:
+    """A description with its parameter set: what the engines take (the in-house paths, the Exudyn translator).
+
+    A user builds one from their own description and parameter file (``Mechanism(describe(ps), ps)``); the
+    study's mechanisms come from :func:`mechanism`. ``guess``: Newton's start for q(0) (default: the parameter
+    file's printed q(0)). The equations are derived once per coordinate set and kept.
+    """
+
+    description: Description
+    parameters: ParameterSet
+    guess: np.ndarray | None = None
+    _equations: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        self.description.validate()
+
+    @property
+    def name(self) -> str:
+        return self.description.name
+
+    def equations(self, coordinates: str = "relative") -> EquationsOfMotion:
+        if coordinates not in self._equations:
+            self._equations[coordinates] = equations_of(self.description, coordinates, self.parameters.sha256)
+        return self._equations[coordinates]
+
+    def initial_state(self) -> ConsistentState:
+        """Consistent q(0), qd(0) in relative coordinates (:func:`consistent_state`)."""
+        return consistent_state(self.description, self.parameters, self.equations(), self.guess)
+
+
+_MECHANISMS: dict[tuple, Mechanism] = {}
+
+
+def mechanism(ps: ParameterSet) -> Mechanism:
+    """The study's mechanism of a parameter set (its description module's ``describe`` and ``initial_guess``)."""
+    key = (ps.mechanism, ps.values)   # the values themselves: a replaced parameter set keeps its sha256
+    if key not in _MECHANISMS:
+        _MECHANISMS[key] = Mechanism(description(ps), ps, initial_guess(ps)[0])
+    return _MECHANISMS[key]
+
+
+def as_mechanism(given: Mechanism | ParameterSet) -> Mechanism:
+    """A :class:`Mechanism`; a study mechanism's parameter set stands for its mechanism."""
+    if isinstance(given, ParameterSet):
+        return mechanism(given)
+    if not isinstance(given, Mechanism):
+        raise TypeError(f"expected a study.Mechanism (a description with its parameter set) or a ParameterSet, got "
+                        f"{type(given).__name__}")
+    return given
+
+
 def builder(ps: ParameterSet, coordinates: str = "relative") -> MechanismBuilder:
     """The body-level equations' builder of a parameter set in a coordinate set."""
     return lower(description(ps), coordinates)
 
 
-_EQUATIONS: dict[tuple, EquationsOfMotion] = {}
-
-
 def equations(ps: ParameterSet, coordinates: str = "relative") -> EquationsOfMotion:
     """Compiled equations of motion of a parameter set ('relative' or 'absolute' coordinates)."""
-    key = (ps.mechanism, ps.values, coordinates)   # the values themselves: a replaced set keeps its sha256
-    if key not in _EQUATIONS:
-        _EQUATIONS[key] = equations_of(description(ps), coordinates, ps.sha256)
-    return _EQUATIONS[key]
+    return mechanism(ps).equations(coordinates)
 
 
 def load(name: str, variant: str = "seed", coordinates: str = "relative") -> tuple[ParameterSet, EquationsOfMotion]:
@@ -129,7 +176,8 @@ def initial_state(ps: ParameterSet, eom: EquationsOfMotion | None = None) -> Con
     (its number of coordinates follows the parameter set) provides ``initial_guess(ps) -> (q, qd)``
     in its module, which replaces the printed q(0).
     """
-    return consistent_state(description(ps), ps, equations(ps) if eom is None else eom, initial_guess(ps)[0])
+    m = mechanism(ps)
+    return m.initial_state() if eom is None else consistent_state(m.description, ps, eom, m.guess)
 
 
 def consistent_state(d: Description, ps: ParameterSet, eom: EquationsOfMotion, guess=None) -> ConsistentState:

@@ -1,0 +1,131 @@
+"""The report of ``study validate``: figures from the saved runs and tables, and ``report.md`` from the tables."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from study.mechanisms import Mechanism  # noqa: E402
+from study.reference_data import tolerance  # noqa: E402
+from study.report.render import fmt_number, md_table  # noqa: E402
+from study.results import SimulationResult  # noqa: E402
+
+
+MAX_PANELS = 8   # coordinates drawn, one panel each
+
+
+def _figures(out: Path, convergence: pd.DataFrame, coordinates: list[str]) -> list[str]:
+    """Trajectories, constraint violation and Exudyn's convergence; returns the figure files (relative to out)."""
+    runs, folder = out / "runs", out / "figures"
+    folder.mkdir(exist_ok=True)
+    names = []
+    ref = SimulationResult.load(runs / "inhouse_reference")
+    exudyn = sorted(runs.glob("exudyn_index3_h*.csv"), key=lambda p: float(p.stem.split("_h")[1]))
+    shown = coordinates[:MAX_PANELS]
+    fig, axes = plt.subplots(len(shown), 1, figsize=(8, 1.2 + 1.8 * len(shown)), sharex=True, squeeze=False)
+    ex = SimulationResult.load(exudyn[0].with_suffix("")) if exudyn else None
+    for i, (name, ax) in enumerate(zip(shown, axes[:, 0])):
+        ax.plot(ref.t, ref.q[:, i], lw=1.8, label="in-house reference")
+        if ex is not None:
+            ax.plot(ex.t, ex.q[:, i], "--", lw=1.2, label=f"Exudyn index 3, h = {ex.meta['h']:g} s")
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    axes[0, 0].set_title("Coordinates" + (f" (the first {MAX_PANELS} of {len(coordinates)})"
+                                          if len(coordinates) > MAX_PANELS else ""))
+    axes[-1, 0].set_xlabel("t [s]")
+    names.append(_save(fig, folder, "trajectories"))
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for path in sorted(runs.glob("inhouse_method_*.csv")):
+        r = SimulationResult.load(path.with_suffix(""))
+        if r.phi.size:
+            ax.semilogy(r.t, np.maximum(np.abs(r.phi).max(axis=1), 1e-18), label=path.stem[len("inhouse_method_"):])
+    _finish(ax, "t [s]", "max |Φ| (floored at 1e-18)", "Constraint violation of every stabilization method "
+            "(DOP853, rtol 1e-8)")
+    names.append(_save(fig, folder, "constraint_violation"))
+
+    ok = convergence[convergence["error"].isna()]   # read with na_values [""]: a run without error
+    if len(ok):
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        for solver, g in ok.groupby("solver", sort=False):
+            ax.loglog(g["h"], g["max_abs_dq"], "o-", label=f"{solver}: max|q − q_ref|")
+            ax.loglog(g["h"], g["max_abs_dqd"], "s--", label=f"{solver}: max|q̇ − q̇_ref|")
+        h = np.sort(ok["h"].unique())
+        ax.loglog(h, ok["max_abs_dq"].max() * (h / h[-1]) ** 2, "k:", label="slope 2")
+        _finish(ax, "h [s]", "deviation from the in-house reference", "Exudyn against the in-house reference")
+        names.append(_save(fig, folder, "exudyn_convergence"))
+    return names
+
+
+def _finish(ax, xlabel: str, ylabel: str, title: str) -> None:
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+
+
+def _save(fig, folder: Path, stem: str) -> str:
+    fig.tight_layout()
+    fig.savefig(folder / f"{stem}.png", dpi=120)
+    plt.close(fig)
+    return f"figures/{stem}.png"
+
+
+def _table(df: pd.DataFrame) -> str:
+    rows = [[fmt_number(v) if isinstance(v, (float, np.floating)) else str(v) for v in row] for row in df.itertuples(
+        index=False)]
+    return md_table(list(df.columns), rows, [df[c].dtype.kind in "fi" for c in df.columns])
+
+
+def write_report(mech: Mechanism, settings, out: Path) -> Path:
+    """``out/report.md`` from ``out/tables`` and the figures drawn from ``out/runs``."""
+    t = {name: pd.read_csv(out / "tables" / f"{name}.csv", keep_default_na=False, na_values=[""])
+         for name in ("initial_state", "in_house", "exudyn_convergence", "exudyn_orders", "reactions")}
+    eom = mech.equations()
+    figures = _figures(out, t["exudyn_convergence"], list(eom.coordinate_names))
+    lines = [f"# Validation of {mech.name}", "",
+             f"{eom.n_coordinates} coordinates ({', '.join(eom.coordinate_names)}), {eom.n_constraints} constraint "
+             f"rows, {len(eom.contacts)} contacts with friction; parameters `{mech.parameters.path.name}` (variant "
+             f"`{mech.parameters.variant}`); horizon {settings.t_end:g} s, samples every {settings.output_step:g} s.",
+             "", "## Consistent initial state", "", _table(t["initial_state"]), ""]
+    methods = t["in_house"]
+    ref = methods[methods["run"] == "reference"].iloc[0]
+    lines += ["## In-house methods", "",
+              f"The reference is DOP853 at rtol {fmt_number(ref['rtol'])} with post-step projection "
+              f"(max|Φ| {fmt_number(ref['max_abs_phi'])}, energy balance error {fmt_number(ref['energy_balance_error_J'])}"
+              f" J). Every other run is compared with it (where a run's friction treatment differs from the reference's, "
+              "the difference includes the laws' own); the energy balance error is the largest change of kinetic + "
+              "potential energy − work of the loads and of friction over the run.", "",
+              _table(methods), ""]
+    lines += ["## Exudyn", "",
+              "Exudyn's model is generated from the same description (`study.exudyn_models`), not from the in-house "
+              "equations, and starts from the same consistent state." + (
+                  f" Friction is the regularized law on both sides (width {settings.friction_eps:g} m/s)."
+                  if len(eom.contacts) else ""), "", _table(t["exudyn_convergence"]), ""]
+    orders = t["exudyn_orders"]
+    min_order = tolerance("min_order", table="cross_validation")
+    for _, r in orders.iterrows():
+        if not r["above_error_floor"]:
+            verdict = ("not judged: the smallest error is below the floor where the reference's and Newton's own "
+                       "errors enter (`reference/cross_validation.toml` order_error_floor)")
+        elif r["meets_min_order"]:
+            verdict = f"second order, as both solvers are (every order ≥ {min_order:g})"
+        else:
+            verdict = f"**below {min_order:g}**: a finding (an unresolved load ramp, a switch, or a mapping error)"
+        lines.append(f"- {r['solver']}, {r['quantity']}: observed orders {r['orders']}; {verdict}.")
+    lines += [""]
+    if len(t["reactions"]):
+        lines += ["## Joint reactions", "", "In-house (reference run, absolute-coordinate multipliers) against "
+                  "Exudyn's joint forces (finest index-3 run):", "", _table(t["reactions"]), ""]
+    lines += ["## Figures", ""] + [f"![{Path(f).stem}]({f})" for f in figures] + [""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines))
+    return path

@@ -1,0 +1,74 @@
+"""``study validate``: a user's mechanism (the Scotch yoke example, which no file of study/ names) through every
+in-house method and Exudyn, through the public API and the command line.
+
+Independent check: Exudyn's own solvers, on a model generated from the same description but integrated by Exudyn's
+formulation, must converge to the in-house reference at their order 2 (``min_order``, reference/cross_validation.toml);
+the yoke's translation coordinate is recovered from Exudyn's body poses (study.exudyn_models.translate), so a mapping
+error there shows as an O(1) deviation that does not shrink with h.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import study
+from study.cli import main
+from study.reference_data import tolerance
+
+YOKE = Path(__file__).resolve().parents[1] / "examples" / "scotch_yoke" / "scotch_yoke.py"
+
+
+@pytest.fixture(scope="module")
+def yoke_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("yoke")
+    tables = study.validate(study.load_mechanism(YOKE), study.ValidationSettings(t_end=0.5), out, say=lambda _: None)
+    return out, tables
+
+
+def test_exudyn_converges_to_the_in_house_reference_at_second_order(yoke_report):
+    _, tables = yoke_report
+    orders = tables["exudyn_orders"]
+    assert set(orders["solver"]) == {"index3", "index2"} and set(orders["quantity"]) == {"q", "qd"}
+    assert orders["above_error_floor"].all()
+    assert (orders["min_order"] >= tolerance("min_order", table="cross_validation")).all(), orders.to_string()
+    assert (tables["exudyn_convergence"]["error"] == "").all()
+
+
+def test_every_method_follows_the_reference_within_its_tolerance(yoke_report):
+    _, tables = yoke_report
+    runs = tables["in_house"].set_index("run")
+    assert set(runs.index) == {"reference", *(f"method {m}" for m in ("none", "baumgarte", "sliding_mode",
+                                                                       "projection"))}
+    q_scale = np.pi   # the crank angle stays within a few rad over 0.5 s
+    bound = 2 * tolerance("adaptive_global_error_factor") * 1e-8 * q_scale
+    for method in ("none", "baumgarte", "projection"):
+        assert runs.loc[f"method {method}", "max_abs_dq_vs_reference"] <= bound, method
+
+
+def test_report_and_figures_are_written_from_saved_runs(yoke_report):
+    out, tables = yoke_report
+    text = (out / "report.md").read_text()
+    for heading in ("Consistent initial state", "In-house methods", "Exudyn", "Joint reactions", "Figures"):
+        assert f"## {heading}" in text
+    for figure in ("trajectories", "constraint_violation", "exudyn_convergence"):
+        assert (out / "figures" / f"{figure}.png").stat().st_size > 10_000
+    saved = pd.read_csv(out / "tables" / "exudyn_convergence.csv", keep_default_na=False)
+    assert len(saved) == 6
+    reactions = tables["reactions"]
+    assert set(reactions["reaction"]) >= {"joint_O_x", "joint_O_y", "joint_A_x", "joint_A_y", "joint_rail_n",
+                                          "joint_slot_n"}
+
+
+def test_command_line_names_what_is_wrong(tmp_path, capsys):
+    assert main(["validate", str(tmp_path / "missing.py"), "--out", str(tmp_path / "o")]) == 2
+    assert "missing.py" in capsys.readouterr().err
+    script = tmp_path / "nothing.py"
+    script.write_text("x = 1\n")
+    assert main(["validate", str(script), "--out", str(tmp_path / "o")]) == 2
+    assert "describe(ps)" in capsys.readouterr().err
+    assert main(["validate", str(YOKE), "--t-end", "0.333", "--out", str(tmp_path / "o")]) == 2
+    assert "t_end = 0.333" in capsys.readouterr().err
