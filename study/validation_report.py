@@ -42,6 +42,8 @@ def _figures(out: Path, convergence: pd.DataFrame, coordinates: list[str]) -> li
     axes[-1, 0].set_xlabel("t [s]")
     names.append(_save(fig, folder, "trajectories"))
 
+    if ref.phi.shape[1] == 0:   # no constraint rows (free bodies held by loads): no violation to draw
+        return names + _convergence_figure(folder, convergence)
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for path in sorted(runs.glob("inhouse_method_*.csv")):
         r = SimulationResult.load(path.with_suffix(""))
@@ -50,8 +52,12 @@ def _figures(out: Path, convergence: pd.DataFrame, coordinates: list[str]) -> li
     _finish(ax, "t [s]", "max |Φ| (floored at 1e-18)", "Constraint violation of every stabilization method "
             "(DOP853, rtol 1e-8)")
     names.append(_save(fig, folder, "constraint_violation"))
+    return names + _convergence_figure(folder, convergence)
 
+
+def _convergence_figure(folder: Path, convergence: pd.DataFrame) -> list[str]:
     ok = convergence[convergence["error"].isna()]   # read with na_values [""]: a run without error
+    names = []
     if len(ok):
         fig, ax = plt.subplots(figsize=(6, 4.5))
         for solver, g in ok.groupby("solver", sort=False):

@@ -365,8 +365,10 @@ class Built:
                                  f"prismatic gap <J>)")
         return out
 
-    def _lam(self, outputs: dict[str, Array], names) -> Array:
-        """lam (..., r) from joint outputs (revolute 'Force', prismatic 'ForceLocal'), in-house convention."""
+    def _lam(self, outputs: dict[str, Array], names, lead: tuple = ()) -> Array:
+        """lam (*lead, r) from joint outputs (revolute 'Force', prismatic 'ForceLocal'), in-house convention."""
+        if not len(names):
+            return np.zeros((*lead, 0))
         cols = []
         for joint, k in self._row_sources(names):
             f = outputs[joint]
@@ -403,7 +405,7 @@ class Built:
             poses_of = lambda series: np.hstack([series[b] for b in d.bodies])  # noqa: E731
             q, qd, qdd = self.kin.coordinates(self.q0, poses_of(pos), poses_of(vel), poses_of(acc))
         outputs = {j.name: self.model.series((j.name, "force"), grid) for j in d.joints}
-        lam = self._lam(outputs, eom.constraint_names)
+        lam = self._lam(outputs, eom.constraint_names, (len(t),))
         rows = list(eom.constraint_names)
 
         forces, works = {}, {}

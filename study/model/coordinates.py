@@ -7,8 +7,8 @@ constraint rows, contacts, loads as expressions of t, q, qd), which :mod:`study.
 
 ``relative``
     The description's own coordinates: each body's angle is the expression the description gives;
-    bodies are placed from ground along a spanning tree of revolute joints and of prismatic joints that
-    have a ``travel`` (description order, a revolute joint marked ``cut=True`` is never a tree joint);
+    a free body sits where its ``position`` says, the others are placed from ground (or from a free
+    body) along a spanning tree of revolute joints and of prismatic joints that have a ``travel`` (description order, a revolute joint marked ``cut=True`` is never a tree joint);
     every other joint is a cut joint whose rows are the loop-closure constraints. Rows that are
     identically zero (a prismatic joint's rotation lock when the angles already agree) are dropped.
 ``absolute``
@@ -42,6 +42,7 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     """COM position and angle of every body in q, and the cut joints (description order)."""
     angles = {GROUND: sp.Integer(0), **{name: b.angle for name, b in d.bodies.items()}}
     poses: dict[str, tuple[sp.Matrix, sp.Expr]] = {GROUND: (sp.zeros(2, 1), sp.Integer(0))}
+    poses.update({name: (sp.Matrix(b.position), b.angle) for name, b in d.bodies.items() if b.position is not None})
     tree: set[str] = set()
     changed = True
     while changed:  # sweep the joints in order until no body can be placed any more
@@ -66,7 +67,7 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     if missing:
         raise DescriptionError(f"mechanism {d.name!r}: bodies {missing} cannot be placed from ground through "
                                f"revolute joints or prismatic joints with a travel (relative coordinates need a "
-                               f"tree of such joints)")
+                               f"tree of such joints), and have no position of their own (a free body)")
     cut = [j for j in d.joints if j.name not in tree]
     return poses, cut
 

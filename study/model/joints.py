@@ -26,8 +26,12 @@ Conventions
   functions with :meth:`~Description.switch`, which returns a mode symbol (+1 or -1: the sign of the
   switching function, frozen between located switches); the law is then smooth in every mode.
 * The relative coordinates: every body's angle is an expression of q (``body(..., angle=...)``).
-  Bodies are placed from ground along a spanning tree of revolute joints, taken in description order;
-  the joints left over (and every prismatic joint) are cut joints, whose rows are the constraints.
+  Bodies are placed from ground along a spanning tree of revolute joints and prismatic joints with a
+  travel, taken in description order; the joints left over are cut joints, whose rows are the
+  constraints. A free body gives its centre of mass too (``body(..., position=(x, y))``, expressions of
+  q): it is placed by its own coordinates, held by loads or by joints, which are then cut joints.
+* ``spring_damper(name, a, b, k, c, L0)``: a linear spring (a potential) and a viscous damper along the
+  line between two points (forces on both, equal and opposite; a ground point carries nothing).
 """
 
 from __future__ import annotations
@@ -55,6 +59,7 @@ class Body:
     inertia: Expr
     points: Mapping[str, tuple[Expr, Expr]]
     angle: Expr
+    position: tuple[Expr, Expr] | None = None   # a free body's centre of mass in q (relative coordinates)
 
 
 @dataclass(frozen=True)
@@ -154,12 +159,15 @@ class Description:
         self.branch: tuple[Expr, str] | None = None
 
     # --- bodies and points -------------------------------------------------------------------
-    def body(self, name: str, mass: Any, inertia: Any, points: Mapping[str, tuple[Any, Any]], angle: Any) -> str:
-        """A rigid body; ``points`` in its COM frame, ``angle`` its angle as an expression of q."""
+    def body(self, name: str, mass: Any, inertia: Any, points: Mapping[str, tuple[Any, Any]], angle: Any,
+             position: tuple[Any, Any] | None = None) -> str:
+        """A rigid body; ``points`` in its COM frame, ``angle`` its angle as an expression of q; ``position`` (a
+        free body) its centre of mass as expressions of q, so that it needs no joint to be placed."""
         if name == GROUND or name in self.bodies:
             raise DescriptionError(f"mechanism {self.name!r}: body name {name!r} is reserved or used twice")
         pts = {k: (sp.sympify(v[0]), sp.sympify(v[1])) for k, v in points.items()}
-        self.bodies[name] = Body(name, sp.sympify(mass), sp.sympify(inertia), pts, sp.sympify(angle))
+        where = None if position is None else (sp.sympify(position[0]), sp.sympify(position[1]))
+        self.bodies[name] = Body(name, sp.sympify(mass), sp.sympify(inertia), pts, sp.sympify(angle), where)
         return name
 
     def ground(self, name: str, x: Any, y: Any) -> tuple[str, str]:
@@ -234,6 +242,21 @@ class Description:
         length = sp.sqrt((xa - xb) ** 2 + (ya - yb) ** 2)
         self.potentials.append(Potential(name, sp.sympify(stiffness) * (length - sp.sympify(rest_length)) ** 2 / 2))
 
+    def spring_damper(self, name: str, a: tuple[str, str], b: tuple[str, str], stiffness: Any, damping: Any,
+                      rest_length: Any) -> None:
+        """A spring (V = k (l - L0)^2 / 2, l = |r_b - r_a|) and a viscous damper (force c dl/dt along the line,
+        opposing the change of length) between two points. The damper is two loads, ``<name>_a`` and ``<name>_b``
+        (the one on a ground point left out); the spring is the potential ``<name>``."""
+        self.spring(name, a, b, stiffness, rest_length)
+        (xa, ya), (xb, yb) = self.position(*a), self.position(*b)
+        (vxa, vya), (vxb, vyb) = self.velocity(*a), self.velocity(*b)
+        length = sp.sqrt((xb - xa) ** 2 + (yb - ya) ** 2)
+        ex, ey = (xb - xa) / length, (yb - ya) / length
+        pull = sp.sympify(damping) * (ex * (vxb - vxa) + ey * (vyb - vya))   # force on b is -pull e, on a +pull e
+        for end, sign in ((a, 1), (b, -1)):
+            if end[0] != GROUND:
+                self.force(f"{name}_{'a' if sign > 0 else 'b'}", end[0], end[1], sign * pull * ex, sign * pull * ey)
+
     # --- metadata ----------------------------------------------------------------------------
     def assembly_branch(self, expr: Any, label: str) -> None:
         """The assembly branch: ``expr(q) > 0`` on the intended configuration."""
@@ -269,9 +292,10 @@ class Description:
                 if e.free_symbols - params:
                     problems.append(f"body {b.name!r}.{key} uses symbols other than parameters: "
                                     f"{sorted(map(str, e.free_symbols - params))}")
-            stray = b.angle.free_symbols - params - set(self.q)
-            if stray:
-                problems.append(f"body {b.name!r}.angle uses unknown symbols {sorted(map(str, stray))}")
+            for key, e in (("angle", b.angle), *((f"position[{i}]", x) for i, x in enumerate(b.position or ()))):
+                stray = e.free_symbols - params - set(self.q)
+                if stray:
+                    problems.append(f"body {b.name!r}.{key} uses unknown symbols {sorted(map(str, stray))}")
             for pname, xy in b.points.items():
                 for e in xy:
                     if e.free_symbols - params:
