@@ -1,9 +1,11 @@
-"""Report section "Benchmarks beyond the papers": Andrews' squeezer and the IFToMM A02 N-four-bar.
+"""Report section "Benchmarks beyond the papers": Andrews' squeezer, the IFToMM A02 N-four-bar and Exudyn's
+slider-crank test model.
 
 The Andrews subsection is :mod:`study.report.sections.andrews`. The N-four-bar subsection reads the
 tables ``singular_four_bar_runs`` and ``singular_four_bar_x_B0`` (written by
 :func:`study.studies.singular.summarize`) and, if present, ``singular_four_bar_scaling`` (written by
-``python -m study.studies.n_four_bar_scaling``); never a run.
+``python -m study.studies.n_four_bar_scaling``); the peer test model's subsection reads ``exudyn_test_models``
+(:func:`study.studies.peer_models.summarize`); never a run.
 """
 
 from __future__ import annotations
@@ -62,7 +64,35 @@ def section(ctx: ReportContext) -> list[str]:
     return ([HEADING, "", "Two problems the multibody community uses to judge formulations, run through the same "
              "description → in-house + Exudyn path as the papers' mechanisms: one with a published reference "
              "solution, one that passes configurations where Φ_q loses rank.", ""]
-            + andrews.subsection(ctx) + _n_four_bar(ctx))
+            + andrews.subsection(ctx) + _n_four_bar(ctx) + _peer_models(ctx))
+
+
+def _peer_models(ctx: ReportContext) -> list[str]:
+    """Exudyn's slider-crank test model against the value its file publishes (table ``exudyn_test_models``)."""
+    table, verdict = ctx.table("exudyn_test_models"), ctx.table("exudyn_test_models_verdict")
+    if table is None or verdict is None:
+        return []
+    v = verdict.iloc[0]
+    factor = tolerance("exudyn_slider_crank_agreement_factor", table="benchmarks")
+    rows = [[r["source"], *(fmt_number(r[c], 6) for c in ("x_slider_fixed_m", "x_slider_floating_m",
+                                                           "sum_abs_x_slider_m")), fmt_number(r["minus_published_m"])]
+            for _, r in table.iterrows()]
+    return ["### A peer's test model: Exudyn's slider-crank on a floating frame", "",
+            "Exudyn's test suite checks its solver with a slider-crank (`sliderCrankFloatingTest`): crank 0.1 m, "
+            "rod 0.3 m, slider 0.4 kg, driven from rest by 0.1 N m, once on ground and once on a frame held by "
+            "coordinate spring-dampers (5000 N/m, 50 N s/m); the file publishes |x_slider(0.3 s)| of the two cases "
+            "summed, from its index-2 solver at h = 6e-5 s. Both cases are descriptions here "
+            "(`study/mechanisms/exudyn_slider_crank.py`, the floating frame a free body), run in-house and "
+            "through the generated Exudyn model at the published step and at half of it.", "",
+            md_table(["source", "x_slider(0.3 s), fixed frame [m]", "floating frame [m]", "sum of |x| [m]",
+                      "− published [m]"], rows, [False, True, True, True, True]), "",
+            f"The generated Exudyn model at the published settings reproduces the published value to "
+            f"{fmt_number(abs(v['exudyn_published_step_minus_published_m']))} m. Richardson's rule puts that run's "
+            f"own discretization error at {fmt_number(v['published_run_error_estimate_m'])} m, and the in-house "
+            f"reference lies {fmt_number(abs(v['inhouse_minus_published_m']))} m from the published value: "
+            f"**{'within' if str(v['agrees']) == 'True' else 'not within'} {factor:g} times that error** "
+            f"(`reference/benchmarks.toml` [exudyn_slider_crank_agreement_factor]); the extrapolated Exudyn value "
+            f"and the in-house reference differ by {fmt_number(abs(v['extrapolated_minus_inhouse_m']))} m.", ""]
 
 
 def _n_four_bar(ctx: ReportContext) -> list[str]:
