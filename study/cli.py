@@ -115,18 +115,26 @@ def _simulate(args: argparse.Namespace) -> int:
     from study.simulate import DEFAULT_OUTPUT_STEP, check_arguments, resolve, simulate
 
     options = method_options(args.option, args.method)
+    target = args.mechanism
+    if target.endswith(".py"):   # a user's mechanism file: its own parameter set, the variant chosen here
+        from study.validation import load_mechanism
+
+        target = load_mechanism(target, args.variant)
     run = {k: getattr(args, k) for k in ("variant", "method", "integrator", "acceleration_solver", "backend", "friction",
                                          "friction_eps", "friction_sgn", "rtol", "atol", "step", "t_end",
                                          "max_evaluations")}
     run["output_step"] = DEFAULT_OUTPUT_STEP if args.output_step is None else args.output_step
     if run["friction"] is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-        run["friction"] = _default_friction(resolve(args.mechanism, args.variant)[0])
+        run["friction"] = _default_friction(resolve(target, None if args.mechanism.endswith(".py") else
+                                                    args.variant)[0])
     if run["friction"] == "none":
         run["friction"] = None
     check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
                     names=SIMULATE_FLAGS)
     _writable(args.out, "--out")
-    result = simulate(args.mechanism, **run, **options,
+    if not isinstance(target, str):
+        run["variant"] = None
+    result = simulate(target, **run, **options,
                       progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None)
     path = result.save(args.out)
     s = result.summary()
@@ -156,8 +164,14 @@ def _validate(args: argparse.Namespace) -> int:
                            if getattr(args, k) is not None})
     out = args.out or Path("validation") / Path(args.file).stem
     _writable(out, "--out", folder=True)
-    validate(load_mechanism(args.file, args.variant), settings, out, say=lambda text: print(text, file=sys.stderr))
-    return 0
+    tables = validate(load_mechanism(args.file, args.variant), settings, out,
+                      say=lambda text: print(text, file=sys.stderr))
+    failed = [*tables["in_house"].loc[tables["in_house"]["error"] != "", "run"],
+              *(f"Exudyn {r.solver} h = {r.h:g} s" for r in tables["exudyn_convergence"].itertuples() if r.error)]
+    if failed:
+        print(f"validate: {len(failed)} runs failed (their errors are in the report): {', '.join(failed)}",
+              file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -266,7 +280,7 @@ def _reproduce(args: argparse.Namespace) -> int:
             print(output, end="")
             if errata.returncode:
                 print(f"error: the errata check failed (exit {errata.returncode})", file=sys.stderr)
-                return errata.returncode
+                return errata.returncode if errata.returncode > 0 else 2
             continue
         if name == "report":  # the manifest shows the wall time of every stage before the report
             record_path = record_root / PIPELINE_RECORD
@@ -277,19 +291,25 @@ def _reproduce(args: argparse.Namespace) -> int:
         try:
             code = step(args) or code
         except BaseException:
-            errata.kill()
+            _stop(errata)
             raise
         stages[name] = time.perf_counter() - t0
         if code and not (name == "run" and code == 1):  # failed cases (1) are reported; errors stop
-            errata.kill()
+            _stop(errata)
             return code
     print("wall time per stage (errata alongside initial and run): "
           + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items())
-          + f"; this host's pace now: {_evaluation_us():.2f} us per compiled quick-return evaluation "
-            "(the README's times are for about 1 us)", file=sys.stderr)
+          + f"; this host's pace now: {_evaluation_us():.2f} us per compiled quick-return evaluation",
+          file=sys.stderr)
     print(f"(details per study: {record_root / PIPELINE_RECORD})", file=sys.stderr)
     print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
     return code
+
+
+def _stop(process: subprocess.Popen) -> None:
+    """End a helper process and reap it."""
+    process.kill()
+    process.wait()
 
 
 def _evaluation_us() -> float:

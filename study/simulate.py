@@ -187,8 +187,9 @@ def simulate(
     min_rtol = tolerance("integrator_min_rtol")
     scipy_steps = backend == "reference" or integrator in SCIPY_STEPS_ONLY
     if scipy_steps and integrator not in FIXED_STEP and rtol < min_rtol:
+        loop = "" if integrator in SCIPY_STEPS_ONLY else " (or backend='compiled', whose loop takes its own steps)"
         raise ValueError(f"rtol = {rtol!r} is below what scipy's {integrator} honours ({min_rtol:.3g} = 100 machine "
-                         f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g} (or backend='compiled')")
+                         f"epsilons; it would silently raise it): use rtol >= {min_rtol:.3g}{loop}")
     max_evaluations, min_step = run_bounds(t_end, max_evaluations, min_step)
     max_output_bytes = tolerance("max_output_bytes") if max_output_bytes is None else max_output_bytes
     if q0 is None or qd0 is None:

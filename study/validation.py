@@ -19,6 +19,7 @@ contact has friction the comparison with Exudyn is at the regularized law (width
 from __future__ import annotations
 
 import importlib.util
+import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,10 +29,12 @@ import numpy as np
 import pandas as pd
 
 from study.compare import common_samples, observed_orders
+from study.errors import SimulationError
 from study.mechanisms import Mechanism
 from study.params import load_parameters
 from study.reference_data import tolerance
 from study.results import SimulationResult
+from study.solver.friction import PainleveError
 
 METHODS = ("none", "baumgarte", "sliding_mode", "projection")
 EXUDYN_SOLVERS = ("index3", "index2")
@@ -72,13 +75,13 @@ def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
     """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it."""
     path = Path(path).resolve()
     if path.suffix != ".py" or not path.is_file():
-        raise ValueError(f"validate: {path} is not a Python file (a user's mechanism: describe(ps) in <name>.py, its "
-                         f"parameters in <name>.toml beside it)")
+        raise ValueError(f"{path} is not a Python file (a user's mechanism: describe(ps) in <name>.py, its parameters "
+                         f"in <name>.toml beside it)")
     spec = importlib.util.spec_from_file_location(f"user_mechanism_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     if not callable(getattr(module, "describe", None)):
-        raise ValueError(f"validate: {path.name} defines no describe(ps) returning a study.Description")
+        raise ValueError(f"{path.name} defines no describe(ps) returning a study.Description")
     ps = load_parameters(path.stem, variant, reference_dir=path.parent)
     guess = None
     if callable(getattr(module, "initial_guess", None)):
@@ -91,8 +94,9 @@ def _friction(mech: Mechanism) -> bool:
     return bool(mech.equations().contacts)
 
 
-def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> dict[str, SimulationResult]:
-    """The reference, every method at everyday settings, and (with friction) every treatment."""
+def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[str, str]]:
+    """The reference, every method at everyday settings, and (with friction) every treatment; a run that stops with
+    a simulation error (other than the reference, which everything is compared with) is recorded with it."""
     law = {"friction": "regularized", "friction_eps": s.friction_eps} if _friction(mech) else {}
     reference = {"integrator": "DOP853", "rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol")}
     plan = {"reference": {**reference, "method": "projection", **law}}
@@ -103,16 +107,21 @@ def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> 
                                        "friction": "sign", "friction_eps": s.friction_eps}
     from study.simulate import simulate
 
-    runs = {}
+    runs, failed = {}, {}
     for k, (name, options) in enumerate(plan.items(), 1):
         say(f"[{k}/{len(plan)}] in-house {name}")
-        runs[name] = simulate(mech, t_end=s.t_end, output_step=s.output_step, **options)
-    return runs
+        try:
+            runs[name] = simulate(mech, t_end=s.t_end, output_step=s.output_step, **options)
+        except (SimulationError, PainleveError) as exc:
+            if name == "reference":
+                raise
+            failed[name] = f"{type(exc).__name__}: {exc}"
+    return runs, failed
 
 
 def _exudyn_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[tuple, str]]:
     """Exudyn at every solver and step; a run Exudyn refuses or that fails is recorded with its error."""
-    from study.exudyn_models import run
+    from study.exudyn_models import ExudynModelError, ExudynSolverError, run
 
     friction = "regularized" if _friction(mech) else "none"
     runs, failed = {}, {}
@@ -122,7 +131,7 @@ def _exudyn_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tu
         try:
             runs[(solver, h)] = run(mech, s.t_end, h, solver=solver, output_step=s.output_step, friction=friction,
                                     eps=s.friction_eps, configuration="tuned")
-        except Exception as exc:  # noqa: BLE001 - a failed Exudyn run is a finding of the report, named with its error
+        except (ExudynSolverError, ExudynModelError) as exc:   # a finding of the report, named with its error
             failed[(solver, h)] = f"{type(exc).__name__}: {exc}"
     return runs, failed
 
@@ -132,7 +141,8 @@ def _deviation(a: SimulationResult, b: SimulationResult, field: str) -> float:
     return float(np.abs(np.asarray(getattr(a, field))[ia] - np.asarray(getattr(b, field))[ib]).max())
 
 
-def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: dict) -> dict[str, pd.DataFrame]:
+def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: dict,
+           inhouse_failed: dict) -> dict[str, pd.DataFrame]:
     """The report's tables from the runs."""
     ref = inhouse["reference"]
     eom = mech.equations()
@@ -148,7 +158,8 @@ def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: di
                      "max_abs_dq_vs_reference": np.nan if name == "reference" else _deviation(r, ref, "q"),
                      "max_abs_phi": summary["max_abs_phi"], "max_abs_phidot": summary["max_abs_phidot"],
                      "energy_balance_error_J": summary["energy_error"], "cpu_s": summary["cpu_seconds"],
-                     "steps": r.stats.get("steps"), "events": r.stats.get("events")})
+                     "steps": r.stats.get("steps"), "events": r.stats.get("events"), "error": ""})
+    rows += [{"run": name, "error": error} for name, error in inhouse_failed.items()]
     methods = pd.DataFrame(rows)
     rows = []
     for (solver, h), r in sorted(exudyn.items(), key=lambda item: (EXUDYN_SOLVERS.index(item[0][0]), -item[0][1])):
@@ -200,21 +211,25 @@ def _reactions(mech: Mechanism, ref: SimulationResult, exudyn: dict) -> pd.DataF
 
 def validate(mech: Mechanism, settings: Settings, out: str | Path,
              say: Callable[[str], None] = print) -> dict[str, pd.DataFrame]:
-    """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs."""
+    """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs
+    (``runs/``, ``tables/``, ``figures/``, emptied first, so nothing of an earlier validation is read back).
+    A failed run is a row of the tables with its error; the reference run must succeed."""
     from study.validation_report import write_report
 
     out = Path(out)
-    (out / "runs").mkdir(parents=True, exist_ok=True)
+    for folder in ("runs", "tables", "figures"):
+        shutil.rmtree(out / folder, ignore_errors=True)
+    (out / "runs").mkdir(parents=True)
     t0 = time.perf_counter()
     say(f"validate {mech.name}: {mech.equations().n_coordinates} coordinates, "
         f"{mech.equations().n_constraints} constraint rows, t_end = {settings.t_end:g} s")
-    inhouse = _in_house_runs(mech, settings, say)
+    inhouse, inhouse_failed = _in_house_runs(mech, settings, say)
     exudyn, failed = _exudyn_runs(mech, settings, say)
     for name, r in inhouse.items():
         r.save(out / "runs" / ("inhouse_" + name.replace(" ", "_").replace("(", "").replace(")", "")))
     for (solver, h), r in exudyn.items():
         r.save(out / "runs" / f"exudyn_{solver}_h{h:g}")
-    result = tables(mech, settings, inhouse, exudyn, failed)
+    result = tables(mech, settings, inhouse, exudyn, failed, inhouse_failed)
     (out / "tables").mkdir(exist_ok=True)
     for name, table in result.items():
         table.to_csv(out / "tables" / f"{name}.csv", index=False)

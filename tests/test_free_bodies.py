@@ -9,8 +9,6 @@ order 2 (``min_order``), and the energy must balance with the dampers' work.
 
 from __future__ import annotations
 
-import textwrap
-
 import numpy as np
 import pytest
 
@@ -109,3 +107,26 @@ def test_floating_frame_energy_balances_with_the_dampers_work(frame_validation):
     assert np.abs(balance - balance[0]).max() <= tolerance("energy_drift_factor") * RTOL * r.energies["kinetic"].max()
     assert min(r.energies[f"work_{m}_b"][-1] for m in ("left_mount", "right_mount")) < 0
     assert set(tables["reactions"]["reaction"]) == {"joint_pin_x", "joint_pin_y"}
+
+
+def test_floating_frame_initial_accelerations_through_body_poses(frame_validation):
+    """Exudyn's initial accelerations map back through every body's pose, pose'' = J qdd + dJ/dt qd
+    (study.exudyn_models.translate.Kinematics.rates): the frame's own rows give x'', y'' directly, the pendulum's
+    rows give them with its centripetal term dJ/dt qd (2 rad/s here), so an error in that term leaves the rows
+    inconsistent and moves the least-squares x'', y''. Bounds as for every mechanism's initial solve
+    (reference/cross_validation.toml: reaction_zero_velocity_relative, reaction_velocity_term_relative)."""
+    from study.exudyn_models import initial_accelerations
+
+    mech, _ = frame_validation
+    s = mech.initial_state()
+
+    def inhouse(qd):
+        return study.simulate(mech, s.q, qd, 0.01, output_step=0.01, integrator="DOP853", rtol=RTOL,
+                              atol=RTOL * 1e-2).qdd[0]
+
+    qdd = inhouse(s.qd)
+    qdd_v = qdd - inhouse(np.zeros_like(s.qd))   # the part of qdd the velocities produce (Exudyn's pin joint: gamma)
+    qdd_x = initial_accelerations(mech, s.q, s.qd)[0]
+    bound = (tolerance("reaction_zero_velocity_relative", table="cross_validation") * np.abs(qdd).max()
+             + tolerance("reaction_velocity_term_relative", table="cross_validation") * np.abs(qdd_v).max())
+    assert np.abs(qdd_x - qdd).max() <= bound, f"Exudyn {qdd_x}, in-house {qdd}"

@@ -18,6 +18,7 @@ import pytest
 import study
 from study.cli import main
 from study.reference_data import tolerance
+from study.results import SimulationResult
 
 YOKE = Path(__file__).resolve().parents[1] / "examples" / "scotch_yoke" / "scotch_yoke.py"
 
@@ -39,11 +40,15 @@ def test_exudyn_converges_to_the_in_house_reference_at_second_order(yoke_report)
 
 
 def test_every_method_follows_the_reference_within_its_tolerance(yoke_report):
-    _, tables = yoke_report
+    """Each everyday run (rtol 1e-8) and the reference (rtol 1e-12) stay within the adaptive runs' global error bound
+    of the exact motion, so within twice the everyday bound of each other. The sliding mode is left out: its sgn term
+    at the default gains moves this motion by ~1e-7 rad, a property of the law (tests/test_examples.py)."""
+    out, tables = yoke_report
     runs = tables["in_house"].set_index("run")
     assert set(runs.index) == {"reference", *(f"method {m}" for m in ("none", "baumgarte", "sliding_mode",
                                                                        "projection"))}
-    q_scale = np.pi   # the crank angle stays within a few rad over 0.5 s
+    assert (runs["error"] == "").all()
+    q_scale = np.abs(SimulationResult.load(out / "runs" / "inhouse_reference").q).max()
     bound = 2 * tolerance("adaptive_global_error_factor") * 1e-8 * q_scale
     for method in ("none", "baumgarte", "projection"):
         assert runs.loc[f"method {method}", "max_abs_dq_vs_reference"] <= bound, method

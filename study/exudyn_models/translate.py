@@ -121,13 +121,18 @@ class Kinematics:
                     break
             else:
                 raise ValueError(f"{self.d.name}: q cannot be recovered from Exudyn's body poses at sample {k} "
-                                 f"(Gauss-Newton did not converge in {POSE_MAX_ITER} iterations)")
-            J = np.asarray(self.pose_jac(qk), dtype=float)
+                                 f"(Gauss-Newton did not converge in {POSE_MAX_ITER} iterations; last step "
+                                 f"{np.abs(step).max():.3g}, q = {qk})")
             q[k] = qk
-            qd[k] = np.linalg.lstsq(J, rates[k], rcond=None)[0]
-            bias = np.asarray(self.pose_bias(qk, qd[k]), dtype=float).ravel()
-            qdd[k] = np.linalg.lstsq(J, accelerations[k] - bias, rcond=None)[0]
+            qd[k], qdd[k] = self.rates(qk, rates[k], accelerations[k])
         return q, qd, qdd
+
+    def rates(self, q: Array, pose_rates: Array, pose_accelerations: Array) -> tuple[Array, Array]:
+        """qd, qdd at q from the bodies' pose rates and accelerations: pose' = J qd, pose'' = J qdd + dJ/dt qd."""
+        J = np.asarray(self.pose_jac(q), dtype=float)
+        qd = np.linalg.lstsq(J, pose_rates, rcond=None)[0]
+        bias = np.asarray(self.pose_bias(q, qd), dtype=float).ravel()
+        return qd, np.linalg.lstsq(J, pose_accelerations - bias, rcond=None)[0]
 
 
 POSE_TOL, POSE_MAX_ITER = 1e-13, 30
@@ -345,7 +350,6 @@ class Built:
     frictions_by_contact: dict = field(default_factory=dict)
     normals: dict = field(default_factory=dict)       # prismatic joint -> n in the guide's body frame
     q0: Array = None                                  # the relative coordinates of the reference configuration
-    qd0: Array = None                                 # and their rates
 
     @property
     def frictions(self) -> list[GuideFriction]:
@@ -383,9 +387,8 @@ class Built:
         if self.kin.pinv is not None:
             qdd = self.kin.pinv @ acc[:, 2]
         else:
-            J = np.asarray(self.kin.pose_jac(self.q0), dtype=float)
-            bias = np.asarray(self.kin.pose_bias(self.q0, self.qd0), dtype=float).ravel()
-            qdd = np.linalg.lstsq(J, acc.ravel() - bias, rcond=None)[0]
+            vel = np.array([self.model.node_output(b, OVT.Coordinates_t) for b in self.d.bodies], dtype=float)
+            qdd = self.kin.rates(self.q0, vel.ravel(), acc.ravel())[1]
         return qdd, self._lam(outputs, eom.constraint_names)
 
     # --- result ----------------------------------------------------------------------------------
@@ -541,7 +544,7 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
         return markers[(body, point)]
 
     built = Built(mech, d, kin, model, friction, eps, loads_jacobian(d), configuration)
-    built.q0, built.qd0 = np.asarray(q0, dtype=float).copy(), np.asarray(qd0, dtype=float).copy()
+    built.q0 = np.asarray(q0, dtype=float).copy()
     for j in d.joints:
         if isinstance(j, Revolute):
             model.revolute(j.name, marker(*j.a), marker(*j.b))

@@ -194,7 +194,9 @@ class FunctionAddress(WrapperAddressProtocol):
     """A compiled function passed from Python as a first-class function, at the cost of a pointer.
 
     Passing the numba dispatcher itself makes every call look its signature up again (~100 us); this holds
-    the address of its compiled wrapper and its numba type (registered with ``typeof`` below)."""
+    the address of its compiled wrapper and its numba type (registered with ``typeof`` below). numba's
+    ``_get_wrapper_address`` is not public API: requirements.lock pins the numba it is written for, and
+    tests/test_fast.py runs Radau and LSODA through it against the reference path."""
 
     def __init__(self, dispatcher, signature):
         self._signature, self.numba_type = signature, types.FunctionType(signature)

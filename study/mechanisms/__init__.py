@@ -107,7 +107,7 @@ _MECHANISMS: dict[tuple, Mechanism] = {}
 
 def mechanism(ps: ParameterSet) -> Mechanism:
     """The study's mechanism of a parameter set (its description module's ``describe`` and ``initial_guess``)."""
-    key = (ps.mechanism, ps.values)   # the values themselves: a replaced parameter set keeps its sha256
+    key = (ps.mechanism, ps.variant, ps.sha256, ps.values)   # values too: a replaced parameter set keeps its sha256
     if key not in _MECHANISMS:
         _MECHANISMS[key] = Mechanism(description(ps), ps, initial_guess(ps)[0])
     return _MECHANISMS[key]

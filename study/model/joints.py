@@ -238,9 +238,14 @@ class Description:
 
     def spring(self, name: str, a: tuple[str, str], b: tuple[str, str], stiffness: Any, rest_length: Any) -> None:
         """A linear spring between two body points: V = k (|r_a - r_b| - L0)^2 / 2."""
+        length = self._length(a, b)[0]
+        self.potentials.append(Potential(name, sp.sympify(stiffness) * (length - sp.sympify(rest_length)) ** 2 / 2))
+
+    def _length(self, a: tuple[str, str], b: tuple[str, str]) -> tuple[Expr, Expr, Expr]:
+        """|r_b - r_a| and the unit vector from a to b, in the points' position inputs (singular where they meet)."""
         (xa, ya), (xb, yb) = self.position(*a), self.position(*b)
         length = sp.sqrt((xa - xb) ** 2 + (ya - yb) ** 2)
-        self.potentials.append(Potential(name, sp.sympify(stiffness) * (length - sp.sympify(rest_length)) ** 2 / 2))
+        return length, (xb - xa) / length, (yb - ya) / length
 
     def spring_damper(self, name: str, a: tuple[str, str], b: tuple[str, str], stiffness: Any, damping: Any,
                       rest_length: Any) -> None:
@@ -248,10 +253,8 @@ class Description:
         opposing the change of length) between two points. The damper is two loads, ``<name>_a`` and ``<name>_b``
         (the one on a ground point left out); the spring is the potential ``<name>``."""
         self.spring(name, a, b, stiffness, rest_length)
-        (xa, ya), (xb, yb) = self.position(*a), self.position(*b)
         (vxa, vya), (vxb, vyb) = self.velocity(*a), self.velocity(*b)
-        length = sp.sqrt((xb - xa) ** 2 + (yb - ya) ** 2)
-        ex, ey = (xb - xa) / length, (yb - ya) / length
+        _, ex, ey = self._length(a, b)
         pull = sp.sympify(damping) * (ex * (vxb - vxa) + ey * (vyb - vya))   # force on b is -pull e, on a +pull e
         for end, sign in ((a, 1), (b, -1)):
             if end[0] != GROUND:

@@ -78,8 +78,10 @@ def consistent_initial_conditions(
         raise ValueError(f"q_guess must have shape ({m},) and qd_independent ({len(ind)},); "
                          f"got {q.shape} and {qd_ind.shape}")
     if r == 0:   # no constraints (free bodies held by loads only): the given state is consistent
-        return ConsistentState(q=q, qd=qd_ind[np.argsort(ind)], iterations=0, phi_residual=0.0,
-                               velocity_residual=0.0, newton_history=(0.0,))
+        qd = np.zeros(m)
+        qd[ind] = qd_ind
+        return ConsistentState(q=q, qd=qd, iterations=0, phi_residual=0.0, velocity_residual=0.0,
+                               newton_history=(0.0,))
     history = []
     singular_ratio = tolerance("singular_ratio")
     for it in range(max_iter + 1):

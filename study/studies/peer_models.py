@@ -50,9 +50,11 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
 
     inhouse, coarse, fine = xs(group="inhouse"), xs(group="exudyn", h=h), xs(group="exudyn", h=h / 2)
     extrapolated = list(richardson_second_order(coarse, fine)[0])
-    rows = [{"source": "published (the test model: Exudyn index 2, h = 6e-5 s)", "x_slider_fixed_m": np.nan,
+    reference = find_one(cases, group="inhouse", mechanism=MECHANISMS[0]).kwargs
+    rows = [{"source": f"published (the test model: Exudyn index 2, h = {h:g} s)", "x_slider_fixed_m": np.nan,
              "x_slider_floating_m": np.nan, "sum_abs_x_slider_m": published, "minus_published_m": 0.0},
-            row("in-house reference (DOP853, rtol 1e-12, projection)", inhouse),
+            row(f"in-house reference ({reference['integrator']}, rtol {reference['rtol']:g}, "
+                f"{reference['method']})", inhouse),
             row(f"Exudyn from the descriptions, index 2, h = {h:g} s", coarse),
             row(f"Exudyn from the descriptions, index 2, h = {h / 2:g} s", fine),
             row("Richardson extrapolation of the two Exudyn runs", extrapolated)]

@@ -191,8 +191,8 @@ def _n_four_bar(ctx: ReportContext) -> list[str]:
                   f"sample (0.01 s for N = 2, 0.05 s for N = 40): {errors}. The true motion is smooth: Exudyn and "
                   "ALI3P follow it, and the acceleration-level method's error is made by the method at the "
                   "crossings, not by the problem's conditioning. Its size depends on where the steps land around "
-                  "each crossing, so that method's values are one host's (at DOP853 rtol 1e-12, x_B0(10 s) was "
-                  "-0.615 m on one host, -0.117 m on another; section \"How far the numbers reproduce\").", ""]
+                  "each crossing, so that method's values are one host's (measured at DOP853 rtol 1e-12: x_B0(10 s) "
+                  "= -0.615 m on one host, -0.117 m on another; section \"How far the numbers reproduce\").", ""]
     ex = passed[passed["engine"] == "exudyn"]
     if len(ex):
         drift = "; ".join(f"{fmt_number(d)} J at {setting}" for setting, d in
