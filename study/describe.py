@@ -14,7 +14,7 @@ import sympy as sp
 from study import mechanisms
 from study.mechanisms import Mechanism
 from study.model.coordinates import joint_rows, poses
-from study.model.joints import Description, Prismatic
+from study.model.joints import Description, Distance, Prismatic
 from study.params import ParameterSet, available_variants, load_parameters
 
 
@@ -64,6 +64,8 @@ def describe_text(mechanism: str | Mechanism, variant: str = "seed") -> str:
                 f = j.friction
                 text += (f"; Coulomb contact mu_s = {show(f.mu_static)}, mu_k = {show(f.mu_kinetic)}, "
                          f"resistance {show(f.resistance)}")
+        elif isinstance(j, Distance):
+            text = f"  {j.name}: distance {show(j.length)} between {_point(j.a)} and {_point(j.b)} [{role}]"
         else:
             text = f"  {j.name}: revolute, {_point(j.a)} = {_point(j.b)} [{role}]"
         lines.append(text)

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from study.mechanisms import Mechanism, as_mechanism
-from study.model.joints import Prismatic, Revolute
+from study.model.joints import Distance, Prismatic, Revolute
 from study.params import ParameterSet
 from study.results import SimulationResult
 
@@ -84,6 +84,8 @@ def joint_reactions(mechanism: Mechanism | ParameterSet, result: SimulationResul
     for j in d.joints:
         if isinstance(j, Revolute):
             out[f"joint_{j.name}_x"], out[f"joint_{j.name}_y"] = lam[:, rows[f"{j.name}_x"]], lam[:, rows[f"{j.name}_y"]]
+        elif isinstance(j, Distance):
+            out[f"joint_{j.name}_tension"] = lam[:, rows[j.name]]
         elif isinstance(j, Prismatic):
             out[f"joint_{j.name}_n"] = -lam[:, rows[j.name]]
             if f"{j.name}_angle" in rows:

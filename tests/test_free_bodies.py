@@ -130,3 +130,56 @@ def test_floating_frame_initial_accelerations_through_body_poses(frame_validatio
     bound = (tolerance("reaction_zero_velocity_relative", table="cross_validation") * np.abs(qdd).max()
              + tolerance("reaction_velocity_term_relative", table="cross_validation") * np.abs(qdd_v).max())
     assert np.abs(qdd_x - qdd).max() <= bound, f"Exudyn {qdd_x}, in-house {qdd}"
+
+
+def cartesian_pendulum_description(ps) -> study.Description:
+    """A point mass on a massless rod in Cartesian coordinates: a free body that does not turn, a distance joint."""
+    d = study.Description("cartesian_pendulum", ["x", "y"], {k: getattr(ps.values, k) for k in ("m", "L", "g")})
+    p = d.p
+    x, y = d.q
+    d.ground("O", 0, 0)
+    d.body("bob", p.m, p.m, {"c": (0, 0)}, angle=0, position=(x, y))   # the angle is no coordinate: J never enters
+    d.distance("rod", (study.GROUND, "O"), ("bob", "c"), p.L)
+    d.gravity(p.g)
+    return d
+
+
+@pytest.fixture(scope="module")
+def pendulum(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("pendulum")
+    ps = _parameters(tmp, "cartesian_pendulum", dict(m=1.0, L=1.0, g=G), [0.6, -0.8], [0.8, 0.6], [0])
+    return study.Mechanism(cartesian_pendulum_description(ps), ps)
+
+
+def test_distance_joint_is_the_hand_written_cartesian_pendulum(pendulum):
+    """The description's equations against tests/handwritten.py's Cartesian pendulum (Phi = (x^2 + y^2 - L^2)/2 there,
+    |r| - L here, so its multiplier is L times ours): the same motion, and lam = the rod's tension."""
+    from handwritten import cartesian_pendulum
+
+    s = pendulum.initial_state()
+    kw = dict(t_end=2.0, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=0.01, method="projection")
+    ours, hand = study.simulate(pendulum, **kw), study.simulate(cartesian_pendulum(1.0, 1.0, G), s.q, s.qd, **kw)
+    bound = 2 * tolerance("adaptive_global_error_factor") * RTOL
+    assert np.abs(ours.q - hand.q).max() <= bound
+    assert np.abs(ours.lam[:, 0] - hand.lam[:, 0]).max() <= bound * np.abs(hand.lam).max()
+    speed2 = (ours.qd ** 2).sum(axis=1)   # tension = m v^2 / L + m g cos(angle from the downward vertical)
+    assert np.allclose(study.joint_reactions(pendulum, ours)["joint_rod_tension"], speed2 - G * ours.q[:, 1],
+                       rtol=0, atol=bound * 100)
+
+
+def test_distance_joint_in_exudyn(pendulum, tmp_path):
+    """Exudyn's DistanceConstraint from the same description: second order towards the in-house reference in q, qd;
+    its force, read as the row's multiplier (the rod's tension), converges to the in-house tension at first order
+    (generalized-alpha's multipliers; measured 1.00). A sign or scale error in the reading would leave an O(1)
+    difference that does not shrink with h. The order band 1 +- 0.2 follows min_order's argument (the next error
+    term within -13 % of the leading one) for a first-order quantity."""
+    tables = study.validate(pendulum, study.ValidationSettings(t_end=0.5), tmp_path, say=lambda _: None)
+    orders = tables["exudyn_orders"]
+    assert len(orders) == 4 and orders["above_error_floor"].all()
+    assert (orders["min_order"] >= tolerance("min_order", table="cross_validation")).all(), orders.to_string()
+    reference = study.simulate(pendulum, t_end=0.5, output_step=0.01, integrator="DOP853", rtol=1e-12, atol=1e-14,
+                               method="projection")
+    inhouse = study.joint_reactions(pendulum, reference)["joint_rod_tension"]
+    errors = [np.abs(study.exudyn_run(pendulum, 0.5, h, output_step=0.01).forces["joint_rod_tension"] - inhouse).max()
+              for h in (1e-3, 5e-4)]
+    assert 0.8 <= np.log2(errors[0] / errors[1]) <= 1.2, errors

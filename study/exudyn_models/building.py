@@ -21,6 +21,7 @@ from exudyn.itemInterface import (
     NodeRigidBody2D,
     ObjectConnectorCartesianSpringDamper,
     ObjectConnectorCoordinateSpringDamper,
+    ObjectConnectorDistance,
     ObjectGround,
     ObjectJointPrismatic2D,
     ObjectJointRevolute2D,
@@ -140,6 +141,14 @@ class Model:
                                                                         storeInternal=True, writeToFile=False))
         return obj
 
+    def distance(self, name: str, marker0: int, marker1: int, length: float) -> int:
+        """DistanceConstraint: the markers' points stay ``length`` apart; sensor 'Force' = its scalar force."""
+        obj = self.mbs.AddObject(ObjectConnectorDistance(markerNumbers=[marker0, marker1], distance=float(length)))
+        self.joints[name] = (obj, "distance")
+        self.sensors[(name, "force")] = self.mbs.AddSensor(SensorObject(objectNumber=obj, outputVariableType=OVT.Force,
+                                                                        storeInternal=True, writeToFile=False))
+        return obj
+
     def torque(self, marker: int, value: float | None = None, user: Callable | None = None) -> int:
         if user is None:
             return self.mbs.AddLoad(LoadTorqueVector(markerNumber=marker, loadVector=[0.0, 0.0, float(value)]))
@@ -205,7 +214,7 @@ class Model:
     def joint_output(self, name: str, ovt=None) -> Array:
         obj, kind = self.joints[name]
         if ovt is None:
-            ovt = OVT.Force if kind == "revolute" else OVT.ForceLocal
+            ovt = OVT.ForceLocal if kind == "prismatic" else OVT.Force
         return np.asarray(self.mbs.GetObjectOutput(obj, ovt), dtype=float)
 
     def node_output(self, name: str, ovt) -> Array:

@@ -75,7 +75,7 @@ import study.exudyn_models.solve as solve
 from study.exudyn_models.building import OVT, BodyState, Model
 from study.exudyn_models.guards import GuideFriction, ReactionGuard
 from study.model.coordinates import poses
-from study.model.joints import GROUND, Description, Prismatic, Revolute
+from study.model.joints import GROUND, Description, Distance, Prismatic, Revolute
 from study.params import ParameterSet
 from study.results import SimulationResult
 
@@ -360,13 +360,13 @@ class Built:
         joints = {j.name: j for j in self.d.joints}
         out = []
         for row in names:
-            if row in joints and isinstance(joints[row], Prismatic):
+            if row in joints and isinstance(joints[row], (Prismatic, Distance)):
                 out.append((row, None))
             elif row[-2:] in ("_x", "_y") and isinstance(joints.get(row[:-2]), Revolute):
                 out.append((row[:-2], 0 if row.endswith("_x") else 1))
             else:
                 raise ValueError(f"constraint row {row!r} has no Exudyn counterpart (supported: revolute <J>_x/_y, "
-                                 f"prismatic gap <J>)")
+                                 f"prismatic gap <J>, distance <J>)")
         return out
 
     def _lam(self, outputs: dict[str, Array], names, lead: tuple = ()) -> Array:
@@ -376,8 +376,12 @@ class Built:
         cols = []
         for joint, k in self._row_sources(names):
             f = outputs[joint]
-            cols.append(-f[..., k] if k is not None else f[..., 0] * self.normals[joint][0]
-                        + f[..., 1] * self.normals[joint][1])
+            if k is not None:                # revolute: minus the force on the marker-0 body
+                cols.append(-f[..., k])
+            elif joint in self.normals:      # prismatic: the local force along the normal
+                cols.append(f[..., 0] * self.normals[joint][0] + f[..., 1] * self.normals[joint][1])
+            else:                            # distance: its force is the multiplier of its row
+                cols.append(f[..., 0])
         return np.stack(cols, axis=-1)
 
     def initial_values(self) -> tuple[Array, Array]:
@@ -445,6 +449,8 @@ class Built:
             f = outputs[j.name]
             if isinstance(j, Revolute):
                 forces[f"joint_{j.name}_x"], forces[f"joint_{j.name}_y"] = -f[:, 0], -f[:, 1]
+            elif isinstance(j, Distance):
+                forces[f"joint_{j.name}_tension"] = f[:, 0]
             else:
                 n = self.normals[j.name]
                 forces[f"joint_{j.name}_n"] = -(f[:, 0] * n[0] + f[:, 1] * n[1])
@@ -492,6 +498,8 @@ class Built:
             if k is not None:
                 parts.append(f"{row} = -Force_{'xy'[k]} of RevoluteJoint2D '{joint}' (force on its second body, "
                              f"global)")
+            elif joint not in self.normals:
+                parts.append(f"{row} = Force of DistanceConstraint '{joint}' (its multiplier: the rod's tension)")
             else:
                 n = self.normals[joint]
                 parts.append(f"{row} = ForceLocal . ({n[0]:g}, {n[1]:g}) of PrismaticJoint2D '{joint}' (force on "
@@ -509,6 +517,8 @@ class Built:
                 out[key] = f"resistance on the slider along the axis of '{key[11:]}', -F tanh(v_t/eps)"
             elif key.startswith("joint_") and key.endswith("_n"):
                 out[key] = "force of the prismatic joint on its slider along the joint normal (= -lam of its row)"
+            elif key.startswith("joint_") and key.endswith("_tension"):
+                out[key] = "tension of the distance constraint (= lam of its row; > 0 pulls its points together)"
             elif key.startswith("joint_"):
                 out[key] = "global force of the revolute joint on its second body b"
             else:
@@ -548,6 +558,9 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
     for j in d.joints:
         if isinstance(j, Revolute):
             model.revolute(j.name, marker(*j.a), marker(*j.b))
+            continue
+        if isinstance(j, Distance):
+            model.distance(j.name, marker(*j.a), marker(*j.b), val(j.length))
             continue
         axis = (val(j.axis[0]), val(j.axis[1]))
         n_guide = np.array([val(j.normal[0]), val(j.normal[1])])

@@ -29,7 +29,7 @@ from __future__ import annotations
 import sympy as sp
 
 from study.model.builder import MechanismBuilder
-from study.model.joints import GROUND, Description, DescriptionError, Prismatic, Revolute, rotation
+from study.model.joints import GROUND, Description, DescriptionError, Distance, Prismatic, Revolute, rotation
 
 COORDINATE_SETS = ("relative", "absolute")
 
@@ -48,7 +48,7 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     while changed:  # sweep the joints in order until no body can be placed any more
         changed = False
         for j in d.joints:
-            if j.name in tree or (j.cut if isinstance(j, Revolute) else j.travel is None):
+            if j.name in tree or isinstance(j, Distance) or (j.cut if isinstance(j, Revolute) else j.travel is None):
                 continue
             for (pa, ta), (pb, tb) in _tree_ends(j):
                 if pa in poses and pb not in poses:
@@ -98,6 +98,9 @@ def joint_rows(d: Description, poses, joint) -> list[tuple[str, sp.Expr]]:
     if isinstance(joint, Revolute):
         gap = sp.expand(_world(d, poses, *joint.a) - _world(d, poses, *joint.b))
         return [(f"{joint.name}_x", gap[0]), (f"{joint.name}_y", gap[1])]
+    if isinstance(joint, Distance):
+        gap = _world(d, poses, *joint.a) - _world(d, poses, *joint.b)
+        return [(joint.name, sp.sqrt(sp.expand(gap[0] ** 2 + gap[1] ** 2)) - joint.length)]
     guide_angle = poses[joint.guide[0]][1]
     normal = rotation(guide_angle) * sp.Matrix(joint.normal)
     gap = (normal.T * (_world(d, poses, *joint.slider) - _world(d, poses, *joint.guide)))[0]

@@ -80,6 +80,18 @@ class Revolute:
 
 
 @dataclass(frozen=True)
+class Distance:
+    """Point a[1] of body a[0] stays at ``length`` from point b[1] of body b[0] (a massless rod with a pin at each
+    end). Always a constraint row, ``<name> = |r_a - r_b| - length``: its multiplier is the rod's force along the
+    line, a tension where it pulls the points together."""
+
+    name: str
+    a: tuple[str, str]
+    b: tuple[str, str]
+    length: Expr
+
+
+@dataclass(frozen=True)
 class Prismatic:
     """``travel``: the slider point's position along ``axis`` from the guide point, as an expression of q. With
     it the joint can place a body in relative coordinates (a tree joint); without it, it is a loop closure."""
@@ -150,7 +162,7 @@ class Description:
         self.t = sp.Symbol("t", real=True)
         self.bodies: dict[str, Body] = {}
         self.ground_points: dict[str, tuple[Expr, Expr]] = {}
-        self.joints: list[Revolute | Prismatic] = []
+        self.joints: list[Revolute | Prismatic | Distance] = []
         self.loads: list[Load] = []
         self.potentials: list[Potential] = []
         self.gravity_g: Expr | None = None
@@ -190,6 +202,10 @@ class Description:
         self.joints.append(Prismatic(name, tuple(slider), tuple(guide), tuple(sp.sympify(v) for v in axis),
                                      tuple(sp.sympify(v) for v in normal), sp.sympify(angle_offset), friction,
                                      None if travel is None else sp.sympify(travel)))
+
+    def distance(self, name: str, a: tuple[str, str], b: tuple[str, str], length: Any) -> None:
+        """Point a keeps its distance ``length`` from point b (a massless rod pinned at both ends; one row)."""
+        self.joints.append(Distance(name, tuple(a), tuple(b), sp.sympify(length)))
 
     # --- load-law inputs ---------------------------------------------------------------------
     def _input(self, kind: str, body: str, point: str | None) -> sp.Symbol:
@@ -304,9 +320,11 @@ class Description:
                     if e.free_symbols - params:
                         problems.append(f"point {b.name}.{pname} must be constant in the body frame")
         for j in self.joints:
-            if isinstance(j, Revolute):
+            if isinstance(j, (Revolute, Distance)):
                 check_point(f"joint {j.name!r}", j.a)
                 check_point(f"joint {j.name!r}", j.b)
+                if isinstance(j, Distance) and j.length.free_symbols - params:
+                    problems.append(f"joint {j.name!r}: length must be a constant (numbers and parameters)")
             else:
                 check_point(f"joint {j.name!r}", j.slider)
                 check_point(f"joint {j.name!r}", j.guide)
