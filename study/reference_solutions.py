@@ -1,5 +1,10 @@
 """Reference motions built independently of the in-house solver and of Exudyn.
 
+IFToMM A01, the simple pendulum released at rest from the horizontal: with phi the angle from the downward
+vertical, phi(0) = pi/2, the exact motion is sin(phi/2) = k sn(omega t + K(k), k), k = sin(pi/4), omega =
+sqrt(g/L) (Jacobi's elliptic sine; K the complete elliptic integral of the first kind, the quarter period). P1
+is at x = L sin(phi), y = -L cos(phi); it starts at x = +L, so phi > 0 on the first swing.
+
 IFToMM A02, the N-four-bar: along the parallelogram branch (every crank at the same angle theta, every
 coupler horizontal) the mechanism has one degree of freedom. With unit-density links of length L and
 mass m, the kinetic energy is a m L^2 theta'^2 and the potential energy b m g L sin(theta), where
@@ -18,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.special import ellipj, ellipk
 
 from study.reference_data import tolerance
 
@@ -45,3 +51,14 @@ def n_four_bar_b0(t: np.ndarray, n: int, length: float, g: float, v0: float = 1.
         raise RuntimeError(f"the A02 reference motion failed: {sol.message}")
     theta, rate = sol.y
     return length * np.cos(theta), -length * np.sin(theta) * rate
+
+
+def simple_pendulum_p1(t: np.ndarray, length: float, g: float) -> tuple[np.ndarray, np.ndarray]:
+    """x, y of P1 [m] at the times ``t`` [s] for A01: released at rest at x = +L, y = 0 (exact, Jacobi's sn).
+
+    x = L sin(phi) = 2 L sin(phi/2) cos(phi/2) and y = -L cos(phi) = -L (1 - 2 sin^2(phi/2)), with sin(phi/2) =
+    k sn(u, k) and cos(phi/2) = dn(u, k) = sqrt(1 - k^2 sn^2), u = omega t + K(k)."""
+    m = 0.5   # k^2, k = sin(pi/4): the amplitude phi(0) = pi/2
+    sn, _, dn, _ = ellipj(np.sqrt(g / length) * np.asarray(t, dtype=float) + ellipk(m), m)
+    half_sin = np.sqrt(m) * sn
+    return 2 * length * half_sin * dn, -length * (1 - 2 * half_sin ** 2)

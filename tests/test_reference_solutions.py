@@ -3,7 +3,9 @@
 import numpy as np
 
 from study.reference_data import tolerance, values
-from study.reference_solutions import n_four_bar_b0, richardson_second_order
+from scipy.integrate import solve_ivp
+
+from study.reference_solutions import n_four_bar_b0, richardson_second_order, simple_pendulum_p1
 
 
 def test_a02_reference_matches_exudyns_published_value_at_10_s():
@@ -34,3 +36,15 @@ def test_a02_reference_matches_exudyns_extrapolated_step_sequence_at_10_s():
                                                           values("a02_exudyn_b0_10s_h1_25e-4", table="benchmarks"))
     x, vx = n_four_bar_b0(np.array([0.0, 10.0]), 2, 1.0, 9.81)
     assert (np.abs(np.array([x[-1], vx[-1]]) - extrapolated) <= error_of_fine).all()
+
+
+def test_simple_pendulum_reference_is_the_pendulum_equation():
+    """A01's exact motion (Jacobi's sn) against an independent integration of phi'' = -(g/L) sin(phi) from
+    phi(0) = pi/2 at rest, to the integration's accuracy (rtol 1e-13 over 20 s, about eight swings)."""
+    t = np.linspace(0.0, 20.0, 41)
+    x, y = simple_pendulum_p1(t, 1.0, 9.81)
+    sol = solve_ivp(lambda _, z: [z[1], -9.81 * np.sin(z[0])], (0.0, 20.0), [np.pi / 2, 0.0], method="DOP853",
+                    rtol=1e-13, atol=1e-15, t_eval=t)
+    bound = tolerance("adaptive_global_error_factor") * 1e-13   # the integration's own global error
+    assert np.abs(x - np.sin(sol.y[0])).max() <= bound and np.abs(y + np.cos(sol.y[0])).max() <= bound
+    assert abs(x[0] - 1.0) <= 4 * np.finfo(float).eps and abs(y[0]) <= 4 * np.finfo(float).eps
