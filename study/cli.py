@@ -124,16 +124,15 @@ def _simulate(args: argparse.Namespace) -> int:
                                          "friction_eps", "friction_sgn", "rtol", "atol", "step", "t_end",
                                          "max_evaluations")}
     run["output_step"] = DEFAULT_OUTPUT_STEP if args.output_step is None else args.output_step
+    if not isinstance(target, str):   # the file's parameter set is already the chosen variant
+        run["variant"] = None
     if run["friction"] is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-        run["friction"] = _default_friction(resolve(target, None if args.mechanism.endswith(".py") else
-                                                    args.variant)[0])
+        run["friction"] = _default_friction(resolve(target, run["variant"])[0])
     if run["friction"] == "none":
         run["friction"] = None
     check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
                     names=SIMULATE_FLAGS)
     _writable(args.out, "--out")
-    if not isinstance(target, str):
-        run["variant"] = None
     result = simulate(target, **run, **options,
                       progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None)
     path = result.save(args.out)

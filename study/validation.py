@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from study.compare import common_samples, observed_orders
+from study.compare import common_samples, max_deviation, observed_orders
 from study.errors import SimulationError
 from study.mechanisms import Mechanism
 from study.params import load_parameters
@@ -136,11 +136,6 @@ def _exudyn_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tu
     return runs, failed
 
 
-def _deviation(a: SimulationResult, b: SimulationResult, field: str) -> float:
-    ia, ib = common_samples(a, b)
-    return float(np.abs(np.asarray(getattr(a, field))[ia] - np.asarray(getattr(b, field))[ib]).max())
-
-
 def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: dict,
            inhouse_failed: dict) -> dict[str, pd.DataFrame]:
     """The report's tables from the runs."""
@@ -155,7 +150,7 @@ def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: di
         summary = r.summary()
         rows.append({"run": name, "integrator": r.meta["integrator"], "rtol": r.meta.get("rtol"),
                      "step": r.meta.get("step"), "friction": r.meta.get("friction"),
-                     "max_abs_dq_vs_reference": np.nan if name == "reference" else _deviation(r, ref, "q"),
+                     "max_abs_dq_vs_reference": np.nan if name == "reference" else max_deviation(r, ref, "q"),
                      "max_abs_phi": summary["max_abs_phi"], "max_abs_phidot": summary["max_abs_phidot"],
                      "energy_balance_error_J": summary["energy_error"], "cpu_s": summary["cpu_seconds"],
                      "steps": r.stats.get("steps"), "events": r.stats.get("events"), "error": ""})
@@ -163,8 +158,8 @@ def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: di
     methods = pd.DataFrame(rows)
     rows = []
     for (solver, h), r in sorted(exudyn.items(), key=lambda item: (EXUDYN_SOLVERS.index(item[0][0]), -item[0][1])):
-        rows.append({"solver": solver, "h": h, "max_abs_dq": _deviation(r, ref, "q"),
-                     "max_abs_dqd": _deviation(r, ref, "qd"), "max_abs_phi": r.summary()["max_abs_phi"],
+        rows.append({"solver": solver, "h": h, "max_abs_dq": max_deviation(r, ref, "q"),
+                     "max_abs_dqd": max_deviation(r, ref, "qd"), "max_abs_phi": r.summary()["max_abs_phi"],
                      "energy_balance_error_J": r.summary()["energy_error"], "cpu_s": r.stats.get("cpu_seconds"),
                      "error": ""})
     rows += [{"solver": solver, "h": h, "error": error} for (solver, h), error in sorted(failed.items())]

@@ -13,7 +13,7 @@ import pandas as pd  # noqa: E402
 
 from study.mechanisms import Mechanism  # noqa: E402
 from study.reference_data import tolerance  # noqa: E402
-from study.report.render import fmt_number, md_table  # noqa: E402
+from study.report.render import fmt_number, frame_table  # noqa: E402
 from study.results import SimulationResult  # noqa: E402
 
 
@@ -86,9 +86,8 @@ def _save(fig, folder: Path, stem: str) -> str:
 
 
 def _table(df: pd.DataFrame) -> str:
-    rows = [[fmt_number(v) if isinstance(v, (float, np.floating)) else str(v) for v in row] for row in df.itertuples(
-        index=False)]
-    return md_table(list(df.columns), rows, [df[c].dtype.kind in "fi" for c in df.columns])
+    """The table with its numbers to 3 significant digits."""
+    return frame_table(df.map(lambda v: fmt_number(v) if isinstance(v, (float, np.floating)) else str(v)), df)
 
 
 def write_report(mech: Mechanism, settings, out: Path) -> Path:

@@ -39,10 +39,8 @@ def describe(ps: study.ParameterSet) -> study.Description:
 def run(t_end: float = 2.0, rtol: float = 1e-10) -> dict[str, study.SimulationResult]:
     """Every stabilization method, DOP853 at ``rtol``, from the consistent initial state of the parameter file."""
     ps = study.load_parameters("scotch_yoke", reference_dir=HERE)
-    d = describe(ps)
-    eom = study.equations_of(d)
-    state = study.consistent_state(d, ps, eom)
-    return study.simulate_methods(eom, state.q, state.qd, t_end, integrator="DOP853", rtol=rtol, atol=rtol * 1e-2)
+    mechanism = study.Mechanism(describe(ps), ps)   # q(0), qd(0): the consistent state of the parameter file
+    return study.simulate_methods(mechanism, t_end=t_end, integrator="DOP853", rtol=rtol, atol=rtol * 1e-2)
 
 
 if __name__ == "__main__":

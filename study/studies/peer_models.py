@@ -41,9 +41,11 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
     published = tolerance(PUBLISHED, table="benchmarks")
     h = tolerance("exudyn_slider_crank_published_step", table="benchmarks")
 
+    def total(xs: list[float]) -> float:
+        return float(sum(abs(x) for x in xs))
+
     def row(source: str, xs: list[float]) -> dict:
-        total = float(sum(abs(x) for x in xs))
-        return dict(zip(COLUMNS, [source, *xs, total, total - published]))
+        return dict(zip(COLUMNS, [source, *xs, total(xs), total(xs) - published]))
 
     def xs(**criteria) -> list[float]:
         return [x_slider(c, load(c)) for c in (find_one(cases, mechanism=m, **criteria) for m in MECHANISMS)]
@@ -58,8 +60,7 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
             row(f"Exudyn from the descriptions, index 2, h = {h:g} s", coarse),
             row(f"Exudyn from the descriptions, index 2, h = {h / 2:g} s", fine),
             row("Richardson extrapolation of the two Exudyn runs", extrapolated)]
-    sums = {k: float(sum(abs(x) for x in v)) for k, v in (("inhouse", inhouse), ("coarse", coarse),
-                                                           ("extrapolated", extrapolated))}
+    sums = {"inhouse": total(inhouse), "coarse": total(coarse), "extrapolated": total(extrapolated)}
     error = abs(sums["extrapolated"] - sums["coarse"])   # the published-step run's error, by Richardson's rule
     factor = tolerance("exudyn_slider_crank_agreement_factor", table="benchmarks")
     verdict = {"published_m": published, "inhouse_minus_published_m": sums["inhouse"] - published,
