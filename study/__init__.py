@@ -43,7 +43,7 @@ __all__ = [
 # Imported when first used: Exudyn (and the report's plotting) load only for what needs them.
 _LAZY = {"exudyn_run": ("study.exudyn_models", "run"), "joint_reactions": ("study.reactions", "joint_reactions"),
          "validate": ("study.validation", "validate"), "ValidationSettings": ("study.validation", "Settings"),
-         "load_mechanism": ("study.validation", "load_mechanism")}
+         "load_mechanism": ("study.mechanisms", "load_mechanism")}
 
 
 def __getattr__(name: str):

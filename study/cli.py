@@ -117,7 +117,7 @@ def _simulate(args: argparse.Namespace) -> int:
     options = method_options(args.option, args.method)
     target = args.mechanism
     if target.endswith(".py"):   # a user's mechanism file: its own parameter set, the variant chosen here
-        from study.validation import load_mechanism
+        from study.mechanisms import load_mechanism
 
         target = load_mechanism(target, args.variant)
     run = {k: getattr(args, k) for k in ("variant", "method", "integrator", "acceleration_solver", "backend", "friction",
@@ -148,7 +148,7 @@ def _describe(args: argparse.Namespace) -> int:
     from study.describe import describe_text
 
     if args.mechanism.endswith(".py"):
-        from study.validation import load_mechanism
+        from study.mechanisms import load_mechanism
 
         print(describe_text(load_mechanism(args.mechanism, args.variant)))
     else:
@@ -157,7 +157,8 @@ def _describe(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.validation import Settings, load_mechanism, validate
+    from study.mechanisms import load_mechanism
+    from study.validation import Settings, validate
 
     settings = Settings(**{k: getattr(args, k) for k in ("t_end", "output_step", "h", "levels", "friction_eps")
                            if getattr(args, k) is not None})

@@ -87,8 +87,9 @@ def _package_graph(package: Path) -> tuple[dict[str, Path], dict[str, set[str]]]
 
 
 @lru_cache(maxsize=None)
-def dependencies(*entries: str) -> tuple[Path, ...]:
-    """The files of the modules reachable from ``entries`` (the entries included), sorted.
+def dependencies(*entries: str, exclude: str | None = None) -> tuple[Path, ...]:
+    """The files of the modules reachable from ``entries`` (the entries included), sorted; modules whose names start
+    with ``exclude`` are neither included nor followed.
 
     Raises
     ------
@@ -103,7 +104,7 @@ def dependencies(*entries: str) -> tuple[Path, ...]:
     todo = list(entries)
     while todo:
         name = todo.pop()
-        if name in seen:
+        if name in seen or (exclude and name.startswith(exclude)):
             continue
         seen.add(name)
         todo += graph[name]

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Callable, Mapping
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from study import arguments
 from study.model.eom import EquationsOfMotion
@@ -62,6 +64,19 @@ def resolve(eom_or_mechanism, variant: str | None):
                      f"mechanism name")
 
 
+def one_blas_thread(fn):
+    """Run ``fn`` with one BLAS thread. The study's matrices are small (Phi_q of the 40-window four-bar is 80 x 81):
+    from about that size on OpenBLAS splits a product over threads, which on a busy host wait for a core (and the
+    waiting counts as process time), and whose order of summation depends on the thread count. The pipeline's
+    workers run with one thread for the same reasons."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with threadpool_limits(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+    return wrapper
+
+
+@one_blas_thread
 def simulate(
     eom_or_mechanism,
     q0=None,

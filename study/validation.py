@@ -18,7 +18,6 @@ contact has friction the comparison with Exudyn is at the regularized law (width
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 import time
 from dataclasses import dataclass
@@ -31,7 +30,6 @@ import pandas as pd
 from study.compare import common_samples, max_deviation, observed_orders
 from study.errors import SimulationError
 from study.mechanisms import Mechanism
-from study.params import load_parameters
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.friction import PainleveError
@@ -69,24 +67,6 @@ class Settings:
     @property
     def steps(self) -> list[float]:
         return [self.h / 2 ** k for k in range(self.levels)]
-
-
-def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
-    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it."""
-    path = Path(path).resolve()
-    if path.suffix != ".py" or not path.is_file():
-        raise ValueError(f"{path} is not a Python file (a user's mechanism: describe(ps) in <name>.py, its parameters "
-                         f"in <name>.toml beside it)")
-    spec = importlib.util.spec_from_file_location(f"user_mechanism_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    if not callable(getattr(module, "describe", None)):
-        raise ValueError(f"{path.name} defines no describe(ps) returning a study.Description")
-    ps = load_parameters(path.stem, variant, reference_dir=path.parent)
-    guess = None
-    if callable(getattr(module, "initial_guess", None)):
-        guess = np.asarray(module.initial_guess(ps)[0], dtype=float)
-    return Mechanism(module.describe(ps), ps, guess)
 
 
 def _friction(mech: Mechanism) -> bool:

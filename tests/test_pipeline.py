@@ -325,20 +325,98 @@ sweep = { atol = ["@reference_atol"], setting = [{ friction = "regularized", fri
 
 @pytest.mark.parametrize("engine", ["inhouse", "exudyn"])
 def test_case_key_covers_every_module_a_run_imports(engine):
-    """A case's key hashes the source of every module reachable from its engine's entry modules: imports inside
-    functions (the run helpers in study/solver/run.py), and the mechanisms that study.mechanisms imports by name
-    at run time; not the report or the command line."""
+    """A case's code version hashes the source of every module reachable from its engine's entry modules: imports
+    inside functions (the run helpers in study/solver/run.py); not the report or the command line, and not the
+    description modules, whose content the mechanism's fingerprint covers (next tests)."""
     from study.imports import dependencies
     from study.sources import PACKAGE_ROOT
 
-    covered = {str(p.relative_to(PACKAGE_ROOT)) for p in dependencies(*pl.ENTRY_MODULES[engine])}
-    assert {"model/derive.py", "solver/friction/contact.py", "mechanisms/andrews.py", "mechanisms/quick_return.py",
+    files = dependencies(*pl.ENTRY_MODULES[engine], exclude=pl.keys.DESCRIPTIONS)
+    covered = {str(p.relative_to(PACKAGE_ROOT)) for p in files}
+    assert {"model/derive.py", "model/joints.py", "solver/friction/contact.py", "mechanisms/__init__.py",
             "params.py", "pipeline/execute.py"} <= covered
     if engine == "inhouse":
         assert {"fast/loop.py", "solver/run.py", "solver/assemble.py"} <= covered
     else:
         assert "exudyn_models/translate.py" in covered
-    assert not {p for p in covered if p.startswith(("report/", "studies/", "cli.py"))}
+    assert not {p for p in covered if p.startswith(("report/", "studies/", "cli.py", "mechanisms/quick_return"))}
+
+
+def _fresh_keys(monkeypatch):
+    """Forget every mechanism and fingerprint this process has built (a new run after an edit)."""
+    from study import mechanisms
+
+    monkeypatch.setattr(mechanisms, "_MECHANISMS", {})
+    mechanisms.named_mechanism.cache_clear()
+    pl.keys.mechanism_hash.cache_clear()
+
+
+def test_an_edited_description_recomputes_its_own_cases_only(monkeypatch):
+    """A change to one mechanism's description changes the keys of its cases and of no other mechanism's."""
+    from study.mechanisms import quick_return
+
+    cases = [pl.Case("s", "g", "inhouse", m, "seed", 1.0, (("method", "none"),)) for m in ("quick_return", "slider_crank")]
+    before = [c.key() for c in cases]
+    describe = quick_return.describe
+
+    def edited(ps):
+        d = describe(ps)
+        d.torque("extra", "crank", 0.5 * d.p.m1)
+        return d
+
+    monkeypatch.setattr(quick_return, "describe", edited)
+    _fresh_keys(monkeypatch)
+    after = [c.key() for c in cases]
+    assert after[0] != before[0] and after[1] == before[1]
+    monkeypatch.setattr(quick_return, "describe", describe)
+    _fresh_keys(monkeypatch)
+    assert [c.key() for c in cases] == before
+
+
+YOKE = Path(__file__).resolve().parents[1] / "examples" / "scotch_yoke"
+
+
+def _yoke_list(folder, text=None):
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in ("scotch_yoke.py", "scotch_yoke.toml"):
+        (folder / name).write_text((YOKE / name).read_text() if text is None or name.endswith(".toml") else text)
+    return _write(folder, '[study]\nsummary = "x"\n[[group]]\nname = "yoke"\nmechanism = "scotch_yoke.py"\n'
+                          't_end = 0.2\nsweep = { method = ["none", "projection"] }\n'
+                          'options = { integrator = "DOP853", rtol = 1e-9, atol = 1e-11, output_step = 0.05 }\n')
+
+
+def test_a_case_list_takes_a_users_mechanism_file(tmp_path, monkeypatch):
+    """A case list names a user's file (relative to the list); the pipeline runs it as simulate runs the file's
+    mechanism; the key follows the description's content, not the file's folder or its comments."""
+    import numpy as np
+
+    import study
+
+    cases = pl.load_case_list(_yoke_list(tmp_path / "a")).cases
+    assert cases[0].mechanism == str((tmp_path / "a" / "scotch_yoke.py").resolve())
+    store = pl.Store(tmp_path / "runs")
+    outcome = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert (outcome.computed, outcome.failed) == (2, {})
+    direct = study.simulate(study.load_mechanism(tmp_path / "a" / "scotch_yoke.py"), t_end=0.2, method="projection",
+                            integrator="DOP853", rtol=1e-9, atol=1e-11, output_step=0.05)
+    np.testing.assert_array_equal(store.load(cases[1]).q, direct.q)
+
+    source = (YOKE / "scotch_yoke.py").read_text()
+    keys = [c.key() for c in cases]
+    elsewhere = pl.load_case_list(_yoke_list(tmp_path / "b", "# a comment\n" + source)).cases
+    _fresh_keys(monkeypatch)
+    assert [c.key() for c in elsewhere] == keys
+    heavier = source.replace("p.mc * p.rc ** 2 / 12", "p.mc * p.rc ** 2 / 3")
+    assert heavier != source
+    edited = pl.load_case_list(_yoke_list(tmp_path / "c", heavier)).cases
+    _fresh_keys(monkeypatch)
+    assert all(e.key() != k for e, k in zip(edited, keys))
+
+
+def test_a_users_file_with_a_problem_is_named_by_the_case_list(tmp_path):
+    path = _yoke_list(tmp_path, "def describe(ps):\n    raise RuntimeError('not written yet')\n")
+    with pytest.raises(pl.CaseListError, match="demo.toml group 'yoke': mechanism = .*scotch_yoke.py.*not written yet"):
+        pl.load_case_list(path)
 
 
 def test_dependencies_follow_function_imports_and_parent_packages(tmp_path, monkeypatch):

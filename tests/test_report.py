@@ -220,6 +220,28 @@ def test_case_lists_name_their_report_sections(tmp_path):
         pl.load_case_lists(folder)
 
 
+def test_a_section_of_your_own_outside_the_package(tmp_path, monkeypatch):
+    """A case list may name a report section by the dotted name of any importable module."""
+    import importlib
+
+    from study.report import report_sections, section_module
+
+    package = tmp_path / "mine"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "yoke_section.py").write_text("def section(ctx):\n    return ['## My yoke', '']\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    folder = tmp_path / "cases"
+    folder.mkdir()
+    (folder / "b.toml").write_text(TINY.replace('section = "sliding_mode"', 'section = "mine.yoke_section"'))
+    sections = report_sections(pl.load_case_lists(folder))
+    assert "mine.yoke_section" in sections and "sliding_mode" not in sections
+    assert importlib.import_module(section_module("mine.yoke_section")).section(None) == ["## My yoke", ""]
+    (folder / "b.toml").write_text(TINY.replace('section = "sliding_mode"', 'section = "theirs.yoke_section"'))
+    with pytest.raises(pl.CaseListError, match="no module theirs.yoke_section can be imported"):
+        report_sections(pl.load_case_lists(folder))
+
+
 def test_backends_section_lists_every_pair_that_does_not_agree(tmp_path):
     """A sampled compiled/reference pair beyond its bound is named with its numbers in the report."""
     from study.report.context import ReportContext

@@ -10,6 +10,7 @@ is otherwise paid once per machine. An explicit ``NUMBA_CACHE_DIR`` in the envir
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 from study.model.compile import cache_dir
@@ -28,6 +29,35 @@ def generated_dir() -> Path:
 def numba_dir() -> Path:
     """Folder of numba's compiled-function cache."""
     return Path(os.environ.get("NUMBA_CACHE_DIR") or cache_dir() / "numba" / SOURCE_HASH)
+
+
+@contextmanager
+def compile_lock():
+    """Hold an exclusive lock on numba's cache folder while kernels with declared signatures compile or load (they
+    do so when their module is imported). Two processes that start together (the test workers, the pipeline's)
+    would otherwise both compile the same kernels; the second now waits and loads what the first saved. Where
+    ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result."""
+    global _held
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    if fcntl is None or _held:   # held by this process already (a nested compile): flock would wait for itself
+        yield
+        return
+    folder = numba_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "compile.lock", "w") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        _held = True
+        try:
+            yield
+        finally:
+            _held = False
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+_held = False
 
 
 if not os.environ.get("NUMBA_CACHE_DIR"):

@@ -26,7 +26,7 @@ from types import ModuleType
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from study.fast.cache import SOURCE_HASH, generated_dir
+from study.fast.cache import SOURCE_HASH, compile_lock, generated_dir
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.compile import description_key
@@ -144,5 +144,6 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
     spec = importlib.util.spec_from_file_location(name, Path(path))
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # numba's cache pickles the module name and imports it on reload
-    spec.loader.exec_module(module)
+    with compile_lock():   # its kernels have declared signatures: they compile (or load) now
+        spec.loader.exec_module(module)
     return module

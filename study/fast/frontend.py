@@ -25,11 +25,14 @@ from numba.core.typing.typeof import typeof_impl
 from numba.experimental.function_type import _get_wrapper_address
 
 from study.errors import NonFiniteError, RunBoundError
+from study.fast.cache import compile_lock
 from study.fast.codegen import generated_module
-from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
-                                 accelerations_entry, rhs_entry)
-from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
-                             FAIL_STALL, FAIL_STEP, integrate_segment)
+
+with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
+    from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
+                                     accelerations_entry, rhs_entry)
+    from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
+                                 FAIL_STALL, FAIL_STEP, integrate_segment)
 from study.fast.signatures import BIAS, EVALUATE
 from study.fast.steppers import METHOD_IDS, tableau
 from study.model.eom import EquationsOfMotion

@@ -8,8 +8,12 @@ the Exudyn model and the joint reactions are all generated from the description.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import importlib.util
 from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -101,6 +105,13 @@ class Mechanism:
         """Consistent q(0), qd(0) in relative coordinates (:func:`consistent_state`)."""
         return consistent_state(self.description, self.parameters, self.equations(), self.guess)
 
+    def fingerprint(self) -> str:
+        """SHA-256 (16 hex) of what a run of this mechanism depends on besides the engine's code: the description's
+        content, the parameter file and Newton's start."""
+        guess = "" if self.guess is None else np.asarray(self.guess, dtype=float).tobytes().hex()
+        text = "\n".join((self.description.fingerprint(), self.parameters.sha256, guess))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
 
 _MECHANISMS: dict[tuple, Mechanism] = {}
 
@@ -111,6 +122,35 @@ def mechanism(ps: ParameterSet) -> Mechanism:
     if key not in _MECHANISMS:
         _MECHANISMS[key] = Mechanism(description(ps), ps, initial_guess(ps)[0])
     return _MECHANISMS[key]
+
+
+def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
+    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it."""
+    path = Path(path).resolve()
+    if path.suffix != ".py" or not path.is_file():
+        raise ValueError(f"{path} is not a Python file (a user's mechanism: describe(ps) in <name>.py, its parameters "
+                         f"in <name>.toml beside it)")
+    spec = importlib.util.spec_from_file_location(f"user_mechanism_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if not callable(getattr(module, "describe", None)):
+        raise ValueError(f"{path.name} defines no describe(ps) returning a study.Description")
+    ps = load_parameters(path.stem, variant, reference_dir=path.parent)
+    guess = None
+    if callable(getattr(module, "initial_guess", None)):
+        guess = np.asarray(module.initial_guess(ps)[0], dtype=float)
+    return Mechanism(module.describe(ps), ps, guess)
+
+
+def is_user_file(name: str) -> bool:
+    """Whether a case's mechanism names a user's file (``path/to/name.py``) rather than a study mechanism."""
+    return name.endswith(".py")
+
+
+@lru_cache(maxsize=None)
+def named_mechanism(name: str, variant: str = "seed") -> Mechanism:
+    """A study mechanism by name, or a user's mechanism file by its path (``.py``), in a variant."""
+    return load_mechanism(name, variant) if is_user_file(name) else mechanism(load_parameters(name, variant))
 
 
 def as_mechanism(given: Mechanism | ParameterSet) -> Mechanism:

@@ -36,6 +36,8 @@ Conventions
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any, Mapping, Sequence
@@ -284,6 +286,12 @@ class Description:
     def contacts(self) -> list[Prismatic]:
         return [j for j in self.joints if isinstance(j, Prismatic) and j.friction is not None]
 
+    def fingerprint(self) -> str:
+        """SHA-256 (16 hex) of the description's content: bodies, joints, loads, switches, branch, parameter values
+        (everything but the report label), so that an edit that changes the mechanism changes it and nothing else does."""
+        content = {k: v for k, v in vars(self).items() if k != "label"}
+        return hashlib.sha256(_canonical(content).encode()).hexdigest()[:16]
+
     # --- checks ------------------------------------------------------------------------------
     def validate(self) -> None:
         """Report every problem of the description in one DescriptionError."""
@@ -362,6 +370,23 @@ class Description:
                 check_point(f"input {inp.kind}", (inp.body, inp.point))
         if problems:
             raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
+
+
+def _canonical(obj: Any) -> str:
+    """A text that is the same for equal content in every process: sympy objects by srepr, containers recursively."""
+    if isinstance(obj, (sp.Basic, sp.MatrixBase)):
+        return sp.srepr(obj)
+    if dataclasses.is_dataclass(obj):
+        return type(obj).__name__ + _canonical({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+    if isinstance(obj, SimpleNamespace):
+        obj = vars(obj)
+    if isinstance(obj, dict):
+        return "{" + ", ".join(f"{_canonical(k)}: {_canonical(v)}" for k, v in obj.items()) + "}"
+    if isinstance(obj, (list, tuple)):
+        return "[" + ", ".join(map(_canonical, obj)) + "]"
+    if obj is None or isinstance(obj, (str, int, float, bool)):
+        return repr(obj)
+    raise TypeError(f"a description holds a {type(obj).__name__}, which has no canonical form")
 
 
 def rotation(angle: Expr) -> sp.Matrix:

@@ -3,7 +3,7 @@
 One module per concept:
 
 * :mod:`.cases`: the case-list schema (``reference/cases/<study>.toml``) and its expansion into cases;
-* :mod:`.keys`: a case's key, from its parameter set and the code version of its engine;
+* :mod:`.keys`: a case's key, from its mechanism's fingerprint and the code version of its engine;
 * :mod:`.store`: the saved results, one per key, checked on every read, and the recorded failures;
 * :mod:`.executors`: where cases run (this process, a local process pool, a Dask cluster);
 * :mod:`.execute`: running one case, and every case not stored yet, with progress;
@@ -18,7 +18,7 @@ from study.pipeline.cases import (BACKENDS, CASES_DIR, ENGINES, SAMPLE_SUFFIX, C
                                   find_one, load_case_list, load_case_lists)
 from study.pipeline.execute import Progress, RunSummary, run_case, run_cases
 from study.pipeline.executors import InlineExecutor, environment_workers, make_executor
-from study.pipeline.keys import ENTRY_MODULES, NUMERIC_PACKAGES, code_version, parameter_hash
+from study.pipeline.keys import ENTRY_MODULES, NUMERIC_PACKAGES, code_version, mechanism_hash
 from study.pipeline.orchestrate import PIPELINE_RECORD, run_pipeline, save_record
 from study.pipeline.store import CorruptResult, MissingResult, Store
 from study.pipeline.summaries import (backend_agreement, backend_cpu, failures_table, sample_agreement, summarize,
@@ -29,7 +29,7 @@ __all__ = [
     "BACKENDS", "CASES_DIR", "ENGINES", "ENTRY_MODULES", "NUMERIC_PACKAGES", "PIPELINE_RECORD", "SAMPLE_SUFFIX",
     "TABLE_FLOAT_FORMAT", "Case", "CaseList", "CaseListError", "CorruptResult", "InlineExecutor", "MissingResult",
     "Progress", "RunSummary", "Store", "backend_agreement", "backend_cpu", "code_version", "environment_workers",
-    "failures_table", "find", "find_one", "load_case_list", "load_case_lists", "make_executor", "parameter_hash",
+    "failures_table", "find", "find_one", "load_case_list", "load_case_lists", "make_executor", "mechanism_hash",
     "read_table", "run_case", "run_cases", "run_pipeline", "sample_agreement", "save_record", "summarize",
     "summary_function", "write_tables",
 ]

@@ -5,7 +5,8 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     [study]
     description = "what the study asks"
     summary = "study.studies.sliding_mode"      # module with summarize(cases, load) -> {table: DataFrame}
-    section = "sliding_mode"                    # optional: its report section (study.report.sections.<name>)
+    section = "sliding_mode"                    # optional: its report section (study.report.sections.<name>, or
+                                                # the dotted name of any importable module with section(ctx))
     section_order = 40                          # ... and that section's place in the report (a number;
                                                 # study.report.FIXED_SECTIONS places the others)
     standalone = "why"                          # optional: a list only its own command runs (the
@@ -55,7 +56,7 @@ from typing import Any, Iterable, Mapping
 
 from study import arguments
 from study.params import REFERENCE_DIR
-from study.pipeline.keys import code_version, parameter_hash
+from study.pipeline.keys import code_version, mechanism_hash
 from study.reference_data import tolerance
 
 CASES_DIR = REFERENCE_DIR / "cases"
@@ -111,9 +112,9 @@ class Case:
 
     def key(self) -> str:
         """Hash of everything that affects the result (the study and group names do not)."""
-        payload = {
-            "engine": self.engine, "mechanism": self.mechanism, "variant": self.variant, "t_end": self.t_end,
-            "options": self.kwargs, "parameters": parameter_hash(self.mechanism, self.variant),
+        payload = {   # a user's file by its name, not its folder: the key is the same in every clone
+            "engine": self.engine, "mechanism": Path(self.mechanism).name, "variant": self.variant,
+            "t_end": self.t_end, "options": self.kwargs, "content": mechanism_hash(self.mechanism, self.variant),
             "code": code_version(self.engine),
         }
         if self.expect_error:  # two lists expecting different outcomes of one run keep separate records
@@ -242,15 +243,23 @@ def _check_group(g: Mapping, where: str) -> None:
 
 def _check_case(case: Case, where: str) -> None:
     """A case's mechanism and variant exist and its options are arguments of its engine, of their types."""
+    from study.mechanisms import is_user_file, named_mechanism
     from study.params import available_mechanisms, available_variants
 
-    known = available_mechanisms()
-    if case.mechanism not in known:
-        raise CaseListError(f"{where}: mechanism = {case.mechanism!r} is not known; valid choices: {', '.join(known)}")
-    variants = available_variants(case.mechanism)
-    if case.variant not in variants:
-        raise CaseListError(f"{where}: variant = {case.variant!r} is not a variant of {case.mechanism}; valid "
-                            f"choices: {', '.join(variants)}")
+    if is_user_file(case.mechanism):
+        try:
+            named_mechanism(case.mechanism, case.variant)
+        except Exception as exc:   # anything a user's file raises is a problem of the case list's input
+            raise CaseListError(f"{where}: mechanism = {case.mechanism!r}: {type(exc).__name__}: {exc}") from None
+    else:
+        known = available_mechanisms()
+        if case.mechanism not in known:
+            raise CaseListError(f"{where}: mechanism = {case.mechanism!r} is not known; valid choices: "
+                                f"{', '.join(known)}, or a user's mechanism file (a path ending in .py)")
+        variants = available_variants(case.mechanism)
+        if case.variant not in variants:
+            raise CaseListError(f"{where}: variant = {case.variant!r} is not a variant of {case.mechanism}; valid "
+                                f"choices: {', '.join(variants)}")
     options = case.kwargs
     try:
         arguments.number("repeat", options.pop("repeat", 1), whole=True)
@@ -308,7 +317,7 @@ def _check_exudyn_options(options: dict) -> None:
     arguments.flag("ignore_singular", given["ignore_singular"])
 
 
-def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
+def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case]:
     _check_group(g, where)
     fields = {"mechanism": g.get("mechanism"), "variant": g.get("variant", "seed"),
               "t_end": _resolve(g.get("t_end"), where)}
@@ -339,6 +348,8 @@ def _expand_group(study: str, g: Mapping, where: str) -> list[Case]:
             continue
         if case_fields["mechanism"] is None or case_fields["t_end"] is None:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
+        if str(case_fields["mechanism"]).endswith(".py"):   # a user's file, relative to the case list's folder
+            case_fields["mechanism"] = str((folder / case_fields["mechanism"]).resolve())
         if backend is not None:   # a sweep entry's own backend option (e.g. an integrator only the
             options.setdefault("backend", backend)   # reference path has) is stated there and wins
         try:
@@ -433,13 +444,13 @@ def load_case_list(path: Path) -> CaseList:
     cases, samples = [], []
     for g in groups:
         where = f"{path.name} group {g['name']!r}"
-        group_cases = _expand_group(study, g, where)
+        group_cases = _expand_group(study, g, where, path.parent)
         cases += group_cases
         samples += _samples(g, group_cases, where)
     section, order = head.get("section"), head.get("section_order")
-    if section is not None and not (isinstance(section, str) and section.isidentifier()):
+    if section is not None and not (isinstance(section, str) and all(p.isidentifier() for p in section.split("."))):
         raise CaseListError(f"{path}: [study] section = {section!r} must be the name of a module of "
-                            f"study.report.sections")
+                            f"study.report.sections, or the dotted name of a module of your own")
     if (section is None) != (order is None):
         raise CaseListError(f"{path}: [study] 'section' and 'section_order' go together (got section = "
                             f"{section!r}, section_order = {order!r})")

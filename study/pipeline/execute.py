@@ -18,7 +18,6 @@ from typing import Iterable, Iterator, Mapping
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from study.params import load_parameters
 from study.pipeline.cases import Case
 from study.pipeline.executors import InlineExecutor
 from study.pipeline.keys import code_version
@@ -28,6 +27,9 @@ from study.results import SimulationResult
 
 def run_case(case: Case) -> SimulationResult:
     """Compute one case (in whatever process the executor chose)."""
+    from study.mechanisms import named_mechanism
+
+    mech = named_mechanism(case.mechanism, case.variant)
     options = case.kwargs
     options.pop("repeat", None)  # the k-th timing of the same run (a key of its own, the same result)
     if case.engine == "inhouse":
@@ -36,23 +38,21 @@ def run_case(case: Case) -> SimulationResult:
         initial = options.pop("initial", "consistent")
         ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
         if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
-            ps = load_parameters(case.mechanism, case.variant)
+            ic = mech.parameters.initial
             # off the constraints on purpose (the study shows what that does): the check would refuse it
-            options.update(q0=list(ps.initial.printed_q), qd0=list(ps.initial.printed_qd), check=False)
+            options.update(q0=list(ic.printed_q), qd0=list(ic.printed_qd), check=False)
         elif initial != "consistent":
             raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
         if ulps:
-            from study.mechanisms import initial_state, load
-
             if "q0" not in options:
-                state = initial_state(*load(case.mechanism, case.variant))
+                state = mech.initial_state()
                 options.update(q0=state.q, qd0=state.qd)
             options.update({k: np.add(options[k], ulps * np.spacing(np.asarray(options[k], float))) for k in ("q0", "qd0")})
-        return simulate(case.mechanism, variant=case.variant, t_end=case.t_end, **options)
+        return simulate(mech, t_end=case.t_end, **options)
     from study import exudyn_models
 
     h = options.pop("h")
-    return exudyn_models.run(load_parameters(case.mechanism, case.variant), case.t_end, h, **options)
+    return exudyn_models.run(mech, case.t_end, h, **options)
 
 
 def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
@@ -120,9 +120,10 @@ def warm_compiled(case: Case) -> None:
     to the first worker and the reference-path and Exudyn cases to the others first, so they find it
     on disk when their turn comes to a compiled case.
     """
+    from study.mechanisms import named_mechanism
     from study.simulate import simulate
 
-    simulate(case.mechanism, variant=case.variant, t_end=1e-3, output_step=1e-3, backend="compiled")
+    simulate(named_mechanism(case.mechanism, case.variant), t_end=1e-3, output_step=1e-3, backend="compiled")
 
 
 def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]) -> Iterator[tuple[Case, Future]]:

@@ -1,10 +1,13 @@
-"""A case's key: the code version of an engine (its source files and numeric packages) and the parameter hash.
+"""A case's key: the code version of an engine (its source files and numeric packages) and the mechanism's content.
 
-A case's key (:meth:`study.pipeline.cases.Case.key`) hashes its specification, the SHA-256 of its
-parameter set (:func:`parameter_hash`) and :func:`code_version`: the source of every module that computes
-it, found by following the import graph (:func:`study.imports.dependencies`) from the engine's entry modules
-(``ENTRY_MODULES``), and the versions of the numerical packages. What those modules do not import (the
-report, the studies' summaries, the command line) does not change a result and is left out.
+A case's key (:meth:`study.pipeline.cases.Case.key`) hashes its specification, the mechanism's fingerprint
+(:func:`mechanism_hash`: the description's symbolic content, the parameter file, Newton's start) and
+:func:`code_version`: the source of every module that computes it, found by following the import graph
+(:func:`study.imports.dependencies`) from the engine's entry modules (``ENTRY_MODULES``), and the versions of the
+numerical packages. What those modules do not import (the report, the studies' summaries, the command line)
+does not change a result and is left out. So are the description modules (``study.mechanisms.<name>``): what
+they produce is in the fingerprint, so an edit to one mechanism recomputes that mechanism's cases only, and a
+user's mechanism file is keyed the same way.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from __future__ import annotations
 import json
 from functools import lru_cache
 
-from study.params import load_parameters
+from study.mechanisms import named_mechanism
 from study.results import package_versions
 from study.imports import dependencies
 from study.sources import source_hash
@@ -23,12 +26,13 @@ ENTRY_MODULES = {
     "exudyn": ("study.pipeline.execute", "study.exudyn_models", "study.mechanisms"),
 }
 NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
+DESCRIPTIONS = "study.mechanisms."   # the description modules: keyed by what they produce (mechanism_hash)
 
 
 @lru_cache(maxsize=None)
-def parameter_hash(mechanism: str, variant: str) -> str:
-    """SHA-256 of a mechanism's parameter set ``variant``."""
-    return load_parameters(mechanism, variant).sha256
+def mechanism_hash(mechanism: str, variant: str) -> str:
+    """Fingerprint of a study mechanism (by name) or a user's mechanism file (by path) in a variant."""
+    return named_mechanism(mechanism, variant).fingerprint()
 
 
 @lru_cache(maxsize=None)
@@ -36,4 +40,4 @@ def code_version(engine: str) -> str:
     """SHA-256 (16 hex) of the source files that compute a result of ``engine`` + numeric package versions."""
     versions = package_versions()
     numeric = json.dumps({p: versions.get(p) for p in NUMERIC_PACKAGES[engine]}, sort_keys=True)
-    return source_hash(dependencies(*ENTRY_MODULES[engine]), extra=numeric)[:16]
+    return source_hash(dependencies(*ENTRY_MODULES[engine], exclude=DESCRIPTIONS), extra=numeric)[:16]

@@ -46,6 +46,12 @@ FIXED_SECTIONS = {"claims": 10.0, "initial": 20.0, "errata": 30.0, "benchmarks":
                   "reproducibility": 110.0}
 
 
+def section_module(name: str) -> str:
+    """The module of a report section: a study section by its name (``study.report.sections.<name>``), or any
+    importable module by its dotted name (a user's own section beside their case lists)."""
+    return name if "." in name else f"study.report.sections.{name}"
+
+
 def report_sections(case_lists: Iterable[CaseList]) -> tuple[str, ...]:
     """The report's sections in order: :data:`FIXED_SECTIONS` and every section a case list names.
 
@@ -53,7 +59,7 @@ def report_sections(case_lists: Iterable[CaseList]) -> tuple[str, ...]:
     ------
     CaseListError
         A section has two places (two case lists, or a case list and FIXED_SECTIONS, disagree), or
-        names no module of ``study.report.sections``.
+        names no module (:func:`section_module`).
     """
     place, named_by = dict(FIXED_SECTIONS), {name: "study.report.FIXED_SECTIONS" for name in FIXED_SECTIONS}
     for cl in case_lists:
@@ -62,9 +68,13 @@ def report_sections(case_lists: Iterable[CaseList]) -> tuple[str, ...]:
         if cl.section in place and place[cl.section] != cl.section_order:
             raise CaseListError(f"{cl.path.name}: [study] section {cl.section!r} at section_order = "
                                 f"{cl.section_order:g}, but {named_by[cl.section]} places it at {place[cl.section]:g}")
-        if importlib.util.find_spec(f"study.report.sections.{cl.section}") is None:
+        try:
+            found = importlib.util.find_spec(section_module(cl.section)) is not None
+        except ModuleNotFoundError:   # a dotted name whose package does not exist
+            found = False
+        if not found:
             raise CaseListError(f"{cl.path.name}: [study] section = {cl.section!r}: no module "
-                                f"study/report/sections/{cl.section}.py")
+                                f"{section_module(cl.section)} can be imported")
         place[cl.section], named_by[cl.section] = cl.section_order, cl.path.name
     return tuple(sorted(place, key=lambda name: (place[name], name)))
 
@@ -153,7 +163,7 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     try:
         for name in report_sections(case_lists.values()):
             ts = time.perf_counter()
-            lines += importlib.import_module(f"study.report.sections.{name}").section(ctx)
+            lines += importlib.import_module(section_module(name)).section(ctx)
             stages[f"report:{name}"] = time.perf_counter() - ts
     finally:
         ts = time.perf_counter()

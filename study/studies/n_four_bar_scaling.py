@@ -10,7 +10,8 @@ in a fresh process with an empty code cache (so nothing is reused between sizes)
   over ``t_sim`` seconds (which include the first singular position at ~0.7 s);
 * ``exudyn_cpu_per_s``: the same for Exudyn index 3, h = 1e-3 s (or its error).
 
-CPU times are process times on the machine that ran it; the table is written to
+CPU times are process times on the machine that ran it, with one BLAS thread as ``simulate`` uses
+(:func:`study.simulate.one_blas_thread`). The table is written to
 ``reports/tables/singular_four_bar_scaling.csv``. Run: ``python -m study.studies.n_four_bar_scaling``
 (~10 min on 2 cores). Not a cached pipeline study: the quantities measured are the costs themselves.
 """
@@ -29,11 +30,13 @@ import numpy as np
 import pandas as pd
 
 from study.integrity import atomic_write
+from study.simulate import one_blas_thread
 
 VARIANTS = (("seed", 2.0), ("n5", 2.0), ("n10", 2.0), ("n20", 1.0), ("n40", 1.0))
 OUT = Path(__file__).resolve().parents[2] / "reports" / "tables" / "singular_four_bar_scaling.csv"
 
 
+@one_blas_thread
 def measure(variant: str, t_sim: float) -> dict:
     """The measurements of one size, in this process (call it in a fresh one with an empty cache)."""
     from study import mechanisms
