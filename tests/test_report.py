@@ -259,3 +259,90 @@ def test_backends_section_lists_every_pair_that_does_not_agree(tmp_path):
     assert "**2 of 3 sampled pairs agree**" in text and "slider_crank 1 of 2, work_precision 1 of 1" in text
     assert "| slider_crank | slider_crank/eps_sweep [eps=1e-2] | 5.77e-05 | 4.44e-05 | 1.3 |" in text
     assert "treatments [exact]" not in text
+
+
+def test_benchmark_overview_judges_every_run_by_its_source_verdict(tmp_path):
+    """The overview that opens "Benchmarks beyond the papers" has one row per run of A01 and A02, the in-house
+    reference and each series' finest setting of Andrews, every run of Exudyn's slider-crank test model and every
+    N = 2 run that reaches 10 s against fourBarMechanismIftomm's x_B0; its verdicts are the source tables' (A01 runs
+    short of the horizon are not judged), Andrews has scd and no limit, and each CPU is its timing table's."""
+    from study.report.context import ReportContext
+    from study.report.sections import benchmark_overview as bo
+    from study.studies import a01
+
+    assert a01.verdict(1e-5, 20.0) == "not judged: 20 s of 2000 s" and a01.verdict(1e-5, 2000.0) == "high precision"
+    assert bo.printed_digits(0.32846) == (5, 5e-6)
+    tables, timing = tmp_path / "tables", tmp_path / "timing"
+    tables.mkdir()
+    timing.mkdir()
+
+    def save(folder, name, frame):
+        pd.DataFrame(frame).to_csv(folder / f"{name}.csv", index=False)
+
+    save(tables, "a01_runs", {"engine": ["inhouse", "inhouse", "exudyn"], "method": ["none", "none", "exudyn"],
+                              "setting": ["DOP853 rtol=1e-08", "DOP853 rtol=1e-06", "index3 h=0.001"],
+                              "t_end_s": [2000, 2000, 20], "output_steps": [4000, None, 40],
+                              "x_max_error_m": [1.99, None, 2.4e-4], "y_max_error_m": [1.01, None, 1.3e-4],
+                              "a01_verdict": ["fails", "stopped", "not judged: 20 s of 2000 s"],
+                              "error": [None, "RunBoundError", None]})
+    save(timing, "a01_timing", {"engine": ["inhouse", "exudyn"], "method": ["none", "exudyn"],
+                                "setting": ["DOP853 rtol=1e-08", "index3 h=0.001"], "cpu_s": [0.48, 0.1]})
+    runs = pd.DataFrame({"engine": ["inhouse", "inhouse", "inhouse", "exudyn", "exudyn"],
+                         "method": ["multiplier + projection", "ALI3P", "ALI3P", "index3", "index3"],
+                         "setting": ["RK45 rtol=1e-8", "h=2e-3", "h=2e-3", "h=0.001", "h=0.0005"],
+                         "N": [2, 2, 40, 2, 2], "t_end_s": [10, 10, 20, 10, 10],
+                         "stopped_at_s": [0.72, None, None, None, None],
+                         "error": ["SingularConfigurationError", None, None, None, None],
+                         "x_B0_max_error_m": [None, 2.4e-5, 4.3e-5, 1.9e-4, 4.8e-5],
+                         "vx_B0_max_error_m_s": [None, 1.5e-4, 2.4e-4, 1.04e-3, 2.6e-4],
+                         "a02_verdict": ["stopped", "high precision", "high precision", "low precision",
+                                         "high precision"],
+                         "x_B0_10s_minus_published_m": [None, 4.9e-6, None, -4.6e-5, 6e-6]})
+    save(tables, "singular_four_bar_runs", runs)
+    save(timing, "singular_four_bar_timing", {**{k: runs[k] for k in ("N", "engine", "method", "setting")},
+                                              "cpu_s": [None, 1.2, 12.4, 0.5, 0.85]})
+    save(tables, "andrews_reference", {"quantity": ["angle", "angle", "rate"], "coordinate": ["beta", "Theta", "beta"],
+                                       "relative_difference": [-7e-11, 1e-10, 3e-7]})
+    keys = {"group": ["reference", "compiled", "compiled", "exudyn", "exudyn"],
+            "engine": ["inhouse", "inhouse", "inhouse", "exudyn", "exudyn"],
+            "backend": ["reference", "compiled", "compiled", "exudyn", "exudyn"],
+            "method": ["none", "none", "none", "exudyn", "exudyn"],
+            "integrator": ["DOP853", "DOP853", "DOP853", "index3", "index3"],
+            "rtol": [1e-13, 1e-8, 1e-12, None, None], "step": [None, None, None, 2e-4, 1.25e-5]}
+    save(tables, "andrews_work_precision", {**keys, "relative_error_published": [1e-10, 1e-7, 1e-9, 1e-2, 1e-4]})
+    save(timing, "andrews_work_precision_timing", {**keys, "cpu_seconds": [0.7, 0.01, 0.02, 0.03, 0.16]})
+    sources = ["published (the test model: Exudyn index 2, h = 6e-05 s)",
+               "in-house reference (DOP853, rtol 1e-12, projection)",
+               "Exudyn from the descriptions, index 2, h = 6e-05 s",
+               "Exudyn from the descriptions, index 2, h = 3e-05 s",
+               "Richardson extrapolation of the two Exudyn runs"]
+    save(tables, "exudyn_test_models", {"source": sources, "sum_abs_x_slider_m": [0.591649] * 5,
+                                        "minus_published_m": [0.0, -5.9e-9, 5.4e-10, -2.5e-8, -5.9e-9]})
+    save(tables, "exudyn_test_models_verdict", {"published_run_error_estimate_m": [6.5e-9], "bound_m": [1.95e-8],
+                                                "agrees": [True]})
+    save(timing, "exudyn_test_models_timing", {"source": sources[1:4], "cpu_s": [0.18, 0.28, 0.48]})
+
+    ctx = ReportContext(reports_dir=tmp_path, store=None, case_lists={})
+    table = bo.rows(ctx)
+    by = {name: table[table["benchmark"] == name] for name in table["benchmark"].unique()}
+    assert list(by[bo.A01]["verdict"]) == ["fails", "stopped (RunBoundError)", "not judged: 20 s of 2000 s"]
+    assert list(by[bo.A01]["error"]) == ["1.99 m (x)", "–", "0.00024 m (x) over 20 s"]
+    a02 = pd.concat([by[bo._a02(2)], by[bo._a02(40)]])
+    assert len(a02) == len(runs)
+    assert list(by[bo._a02(2)]["verdict"]) == ["stopped at t = 0.72 s (SingularConfigurationError)",
+                                                "high precision", "low precision", "high precision"]
+    assert list(by[bo._a02(40)]["verdict"]) == ["high precision"]
+    assert list(by[bo.ANDREWS]["method"]) == ["reference: none, DOP853 rtol=1e-13", "none, DOP853 rtol=1e-12 (compiled)",
+                                              "index3, h=1.25e-05"]   # the reference, then each series' finest
+    assert list(by[bo.ANDREWS]["verdict"]) == [f"scd {s}; the Test Set sets no limit" for s in ("10", "9", "4")]
+    assert list(by[bo.ANDREWS]["cpu_s"]) == [0.7, 0.02, 0.16]
+    assert list(by[bo.SLIDER_CRANK]["verdict"]) == ["agrees: within 1.95e-08 m", "agrees: within 1.95e-08 m",
+                                                    "does not agree: beyond 1.95e-08 m"]
+    assert list(by[bo.SLIDER_CRANK]["cpu_s"]) == [0.18, 0.28, 0.48]
+    assert list(by[bo.FOUR_BAR]["verdict"]) == ["matches the published 5 digits",
+                                                "misses the published 5 digits by 4.6e-05 m",
+                                                "misses the published 5 digits by 6e-06 m"]
+    assert len(table) == 3 + len(runs) + 3 + 3 + 3
+    text = "\n".join(bo.overview(ctx))
+    assert text.count("\n| ") == len(table) + 1   # header and one line per row
+    assert "| Exudyn | index3 h=0.001 | 0.00024 m (x) over 20 s | **not judged: 20 s of 2000 s** | 0.1 |" in text

@@ -187,3 +187,14 @@ def test_breakaway_torque_is_where_the_holding_force_reaches_the_static_limit():
         f = slider_crank_paper.holding_forces(dataclasses.replace(v, M=factor * b["breakaway_M"]), q)["f_required"]
         normal = v.m3 * v.g + (v.m2 * v.g * v.c2 * math.cos(th) + v.l2 * math.sin(th) * f) / (v.l2 * math.cos(th))
         assert (abs(f) <= v.F + v.mu * abs(normal)) is holds
+
+
+def test_singular_x_b0_against_the_published_value_only_for_n2_at_10s():
+    """x_B0(10 s) minus fourBarMechanismIftomm's published 0.32846 m, at full precision, for N = 2 runs that end at
+    10 s; NaN for N = 40 or a run that ends elsewhere."""
+    from study.studies import singular
+
+    t, xb = np.array([0.0, 10.0]), np.array([1.0, 0.32846488])
+    assert singular.minus_published(2, t, xb) == pytest.approx(4.88e-6, abs=1e-12)
+    assert np.isnan(singular.minus_published(40, t, xb))
+    assert np.isnan(singular.minus_published(2, np.array([0.0, 9.5]), xb))

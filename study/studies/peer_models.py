@@ -7,7 +7,9 @@ model file publishes one number, |x_slider(0.3 s)| of the fixed case plus that o
 value, the in-house reference, Exudyn at h and at h/2, Richardson's extrapolation of the two), with each case's
 x_slider(0.3 s), their sum, and the sum's difference from the published value; ``exudyn_test_models_verdict``: the
 published run's discretization error estimated by Richardson's rule from the Exudyn runs at h and h/2, and whether
-the in-house reference lies within ``exudyn_slider_crank_agreement_factor`` of those errors of the published value.
+the in-house reference lies within ``exudyn_slider_crank_agreement_factor`` of those errors of the published value;
+``exudyn_test_models_timing``: the CPU seconds of each source that is a pair of runs (fixed plus floating frame;
+machine-dependent, so in timing/).
 """
 
 from __future__ import annotations
@@ -47,18 +49,26 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
     def row(source: str, xs: list[float]) -> dict:
         return dict(zip(COLUMNS, [source, *xs, total(xs), total(xs) - published]))
 
-    def xs(**criteria) -> list[float]:
-        return [x_slider(c, load(c)) for c in (find_one(cases, mechanism=m, **criteria) for m in MECHANISMS)]
+    cpu = {}
 
-    inhouse, coarse, fine = xs(group="inhouse"), xs(group="exudyn", h=h), xs(group="exudyn", h=h / 2)
-    extrapolated = list(richardson_second_order(coarse, fine)[0])
+    def xs(source: str, **criteria) -> list[float]:
+        pair = [find_one(cases, mechanism=m, **criteria) for m in MECHANISMS]
+        results = [load(c) for c in pair]
+        cpu[source] = float(sum(r.stats.get("cpu_seconds", np.nan) for r in results))
+        return [x_slider(c, r) for c, r in zip(pair, results)]
+
     reference = find_one(cases, group="inhouse", mechanism=MECHANISMS[0]).kwargs
-    rows = [{"source": f"published (the test model: Exudyn index 2, h = {h:g} s)", "x_slider_fixed_m": np.nan,
-             "x_slider_floating_m": np.nan, "sum_abs_x_slider_m": published, "minus_published_m": 0.0},
-            row(f"in-house reference ({reference['integrator']}, rtol {reference['rtol']:g}, "
-                f"{reference['method']})", inhouse),
-            row(f"Exudyn from the descriptions, index 2, h = {h:g} s", coarse),
-            row(f"Exudyn from the descriptions, index 2, h = {h / 2:g} s", fine),
+    sources = {"published": f"published (the test model: Exudyn index 2, h = {h:g} s)",
+               "inhouse": f"in-house reference ({reference['integrator']}, rtol {reference['rtol']:g}, "
+                          f"{reference['method']})",
+               "coarse": f"Exudyn from the descriptions, index 2, h = {h:g} s",
+               "fine": f"Exudyn from the descriptions, index 2, h = {h / 2:g} s"}
+    inhouse, coarse, fine = (xs(sources["inhouse"], group="inhouse"), xs(sources["coarse"], group="exudyn", h=h),
+                             xs(sources["fine"], group="exudyn", h=h / 2))
+    extrapolated = list(richardson_second_order(coarse, fine)[0])
+    rows = [{"source": sources["published"], "x_slider_fixed_m": np.nan, "x_slider_floating_m": np.nan,
+             "sum_abs_x_slider_m": published, "minus_published_m": 0.0},
+            row(sources["inhouse"], inhouse), row(sources["coarse"], coarse), row(sources["fine"], fine),
             row("Richardson extrapolation of the two Exudyn runs", extrapolated)]
     sums = {"inhouse": total(inhouse), "coarse": total(coarse), "extrapolated": total(extrapolated)}
     error = abs(sums["extrapolated"] - sums["coarse"])   # the published-step run's error, by Richardson's rule
@@ -69,4 +79,5 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
                "agrees": abs(sums["inhouse"] - published) <= factor * error,
                "extrapolated_minus_inhouse_m": sums["extrapolated"] - sums["inhouse"]}
     return {"exudyn_test_models": pd.DataFrame(rows, columns=COLUMNS),
-            "exudyn_test_models_verdict": pd.DataFrame([verdict])}
+            "exudyn_test_models_verdict": pd.DataFrame([verdict]),
+            "exudyn_test_models_timing": pd.DataFrame({"source": list(cpu), "cpu_s": list(cpu.values())})}

@@ -27,7 +27,8 @@ EXUDYN_STYLE = {"index3": {"color": "tab:red", "marker": "D", "ls": "-"},
                 "index2": {"color": "tab:cyan", "marker": "v", "ls": "--"}}
 
 
-def _with_cpu(table: pd.DataFrame, timing: pd.DataFrame | None) -> pd.DataFrame:
+def with_cpu(table: pd.DataFrame, timing: pd.DataFrame | None) -> pd.DataFrame:
+    """The runs of ``andrews_work_precision`` with their ``cpu_seconds`` from its timing table (NaN without it)."""
     if timing is None:
         return table.assign(cpu_seconds=np.nan)
     keys = ["group", "engine", "backend", "method", "integrator", "rtol", "step"]
@@ -188,7 +189,7 @@ def subsection(ctx: ReportContext) -> list[str]:
     ref, table, orders = ctx.table("andrews_reference"), ctx.table("andrews_work_precision"), ctx.table("andrews_orders")
     if ref is None or table is None or orders is None:
         return lines + ["No saved tables `tables/andrews_*.csv`; run the pipeline first (`python -m study run andrews`).", ""]
-    table = _with_cpu(table, ctx.table("andrews_work_precision_timing"))
+    table = with_cpu(table, ctx.table("andrews_work_precision_timing"))
     angles = ref[ref["quantity"] == "angle"]
     diff = float(np.abs(angles["difference"]).max())
     bound = tolerance("angle_agreement", table=TABLE)
