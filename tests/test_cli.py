@@ -2,8 +2,6 @@
 
 import functools
 import importlib
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -31,11 +29,18 @@ def test_simulate_writes_result(tmp_path, capsys):
     (["--t-end", "-1"], "--t-end = -1.0 must be finite and > 0"),
     (["--variant", "nope"], "unknown variant (valid choices: seed, smooth_cutting, guide_friction)"),
 ])
-def test_simulate_bad_input(tmp_path, args, message):
-    proc = subprocess.run([sys.executable, "-m", "study", "simulate", "quick_return", *args, "--out",
-                           str(tmp_path / "x")], capture_output=True, text=True)
-    assert proc.returncode != 0
-    assert message in proc.stderr
+def test_simulate_bad_input(tmp_path, capsys, args, message):
+    code, err = _refused(capsys, ["simulate", "quick_return", *args, "--out", str(tmp_path / "x")])
+    assert code == 2 and message in err and not (tmp_path / "x.csv").exists()
+
+
+def _refused(capsys, args):
+    """Exit code and stderr of the command line in this process (tests/test_reliability.py runs a real one)."""
+    try:
+        code = main(args)
+    except SystemExit as exc:   # argparse's own refusals
+        code = exc.code
+    return code, capsys.readouterr().err
 
 
 # --- friction, variant, backend, bench ---------------------------------------------------------
@@ -103,11 +108,9 @@ def test_simulate_passes_variant_backend_and_friction(monkeypatch, tmp_path):
     (["--backend", "gpu"], "invalid choice: 'gpu'"),
     (["--friction", "regularized", "--friction-eps", "0"], "--friction-eps = 0.0 must be finite and > 0"),
 ])
-def test_simulate_bad_friction_or_backend(tmp_path, args, message):
-    proc = subprocess.run([sys.executable, "-m", "study", "simulate", "slider_crank", "--t-end", "0.1", *args,
-                           "--out", str(tmp_path / "x")], capture_output=True, text=True)
-    assert proc.returncode != 0
-    assert message in proc.stderr
+def test_simulate_bad_friction_or_backend(tmp_path, capsys, args, message):
+    code, err = _refused(capsys, ["simulate", "slider_crank", "--t-end", "0.1", *args, "--out", str(tmp_path / "x")])
+    assert code == 2 and message in err and not (tmp_path / "x.csv").exists()
 
 
 def test_every_command_help_shows_an_example(capsys):
@@ -166,14 +169,14 @@ def test_describe_lists_variants_with_their_changes(capsys):
     assert "switching function v_D: vx(ram.D)" in capsys.readouterr().out
 
 
-def test_describe_unknown_mechanism_names_the_choices():
-    proc = subprocess.run([sys.executable, "-m", "study", "describe", "pendulum"], capture_output=True, text=True)
-    assert proc.returncode == 2 and "unknown mechanism 'pendulum'" in proc.stderr and "four_bar" in proc.stderr
+def test_describe_unknown_mechanism_names_the_choices(capsys):
+    code, err = _refused(capsys, ["describe", "pendulum"])
+    assert code == 2 and "unknown mechanism 'pendulum'" in err and "four_bar" in err
 
 
-def test_describe_takes_a_users_mechanism_file():
+def test_describe_takes_a_users_mechanism_file(capsys):
     """A user's file (describe(ps) and a parameter file beside it) is described like a study mechanism."""
     path = Path(__file__).resolve().parents[1] / "examples" / "scotch_yoke" / "scotch_yoke.py"
-    proc = subprocess.run([sys.executable, "-m", "study", "describe", str(path)], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    assert "rail: prismatic" in proc.stdout and "by the travel x" in proc.stdout and "q(0)" in proc.stdout
+    assert main(["describe", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "rail: prismatic" in out and "by the travel x" in out and "q(0)" in out

@@ -55,6 +55,13 @@ exclude = [{ method = "projection" }, { variant = "seed", method = "none" }]
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweep = { omega = 3 }', "sweep.omega = 3 must be a non-empty list"),
     ('name = "g"\nt_end = 1.0', "'mechanism' and 't_end' are required"),
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "exudyn"', "needs the step 'h'"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "exudyn"\n'
+     'options = { h = 1e-3, linear_solver = "lu" }',
+     "unknown linear solver 'lu'; valid choices: dense, sparse"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "exudyn"\n'
+     'options = { h = 1e-3, newton_tolerance = 0.0 }', "newton_tolerance = 0.0 must be a number in (0, 1)"),
+    ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nengine = "exudyn"\n'
+     'options = { h = 3e-3 }', "t_end = 1.0 must be a whole number of steps h = 0.003"),
     ('name = "g"\nmechanism = "quick_return"\nt_end = 1.0\nsweep = { method = ["none"] }\n'
      'exclude = [{ methd = "none" }]', "names ['methd'], which no case of the group sets"),
 ])

@@ -1,7 +1,8 @@
 """Exudyn models of the study's mechanisms, generated from their joint-level descriptions (the only
 package that imports ``exudyn``).
 
-``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=..., configuration='python') ->
+``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=..., configuration='python',
+ignore_singular=False, linear_solver='dense') ->
 study.results.SimulationResult`` builds the Exudyn model of ``ps``'s description
 (:mod:`study.exudyn_models.translate`); there is no per-mechanism code. The in-house equations of
 motion are used for nothing but the consistent initial state and for evaluating the in-house Phi on
@@ -29,6 +30,7 @@ from study.exudyn_models.settings import (
     EXPLICIT_SOLVERS,
     FRICTION_MODES,
     IMPLICIT_SOLVERS,
+    LINEAR_SOLVERS,
     ExudynModelError,
     ExudynSolverError,
     exudyn_version,
@@ -41,6 +43,7 @@ __all__ = [
     "EXPLICIT_SOLVERS",
     "FRICTION_MODES",
     "IMPLICIT_SOLVERS",
+    "LINEAR_SOLVERS",
     "ExudynModelError",
     "ExudynSolverError",
     "exudyn_version",

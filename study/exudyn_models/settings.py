@@ -16,6 +16,9 @@ Verified Exudyn 1.13.6 behaviour the Exudyn models rely on (see the docstrings w
 * The initial-acceleration solve forms the quadratic-velocity term of the index-3 joint
   constraints by numerical differentiation (relative step 1e-7): the initial multipliers differ
   from an exact solve by a few 1e-7 of that term (zero at zero velocity).
+* ``linearSolver.ignoreSingularJacobian`` has no effect with the sparse solver (EigenSparse): N-four-bar
+  seed, index 3, 2 s, the sparse run with the flag is bit-identical to the one without (Exudyn documents
+  the flag for dense matrices only), hence LINEAR_SOLVERS refuses the combination.
 * Explicit solvers refuse joint constraints with ``exudyn.ModelError`` ("SolverExplicit: explicit
   integrator detected object <n> which contains constraints that cannot be solved; aborting solver").
 """
@@ -74,6 +77,24 @@ CONFIGURATION_DESCRIPTIONS = {
              "cannot express that way, and the friction reading a joint reaction, stay Python user functions",
 }
 
+#: The linear solver of Newton's iteration (``linearSolver.solverType``; the older name
+#: ``SimulationSettings.linearSolverType`` is deprecated in Exudyn 1.13): 'dense' = Exudyn's own dense
+#: matrix inverse (EXUdense, Exudyn's default); 'sparse' = Eigen's SparseLU (EigenSparse), which Exudyn
+#: recommends for larger systems (the N-four-bar at N = 40). Both solve the same Newton systems; the accepted
+#: steps differ only as far
+#: as the Newton tolerance lets them. ``linearSolver.ignoreSingularJacobian`` is implemented for the dense
+#: solvers only (Exudyn's documentation of LinearSolverSettings), so ``ignore_singular`` is refused with
+#: 'sparse' rather than silently not applied.
+LINEAR_SOLVERS = ("dense", "sparse")
+LINEAR_SOLVER_TYPES = {
+    "dense": exu.LinearSolverType.EXUdense,
+    "sparse": exu.LinearSolverType.EigenSparse,
+}
+LINEAR_SOLVER_DESCRIPTIONS = {
+    "dense": "Exudyn EXUdense (dense matrix inverse, Exudyn's default)",
+    "sparse": "Exudyn EigenSparse (Eigen SparseLU factorization)",
+}
+
 ExudynModelError = exu.ModelError
 ExudynSolverError = exu.SolverError
 
@@ -114,15 +135,17 @@ class RunGrid:
 
 
 def check_arguments(t_end: float, h: float, solver: str, output_step: float | None,
-                    friction: str, eps: float, configuration: str = "python") -> RunGrid:
+                    friction: str, eps: float, configuration: str = "python", linear_solver: str = "dense",
+                    ignore_singular: bool = False, newton_tolerance: float = NEWTON_TOLERANCE) -> RunGrid:
     """Validate the arguments of a ``run`` and return its time grid.
 
     Raises
     ------
     ValueError
-        Unknown solver or friction mode (the message lists the valid choices), ``t_end <= 0``,
+        Unknown solver, friction mode, configuration or linear solver (the message lists the valid
+        choices), ``ignore_singular`` with the sparse linear solver, ``t_end <= 0``,
         ``h <= 0``, ``t_end`` not a whole number of steps, ``output_step`` not a positive whole
-        multiple of ``h``, ``eps <= 0``.
+        multiple of ``h``, ``eps <= 0``, ``newton_tolerance`` not in (0, 1).
     """
     problems = []
     if solver not in SOLVERS:
@@ -131,6 +154,14 @@ def check_arguments(t_end: float, h: float, solver: str, output_step: float | No
         problems.append(f"unknown friction mode {friction!r}; valid choices: {', '.join(FRICTION_MODES)}")
     if configuration not in CONFIGURATIONS:
         problems.append(f"unknown Exudyn configuration {configuration!r}; valid choices: {', '.join(CONFIGURATIONS)}")
+    if linear_solver not in LINEAR_SOLVERS:
+        problems.append(f"unknown linear solver {linear_solver!r}; valid choices: {', '.join(LINEAR_SOLVERS)}")
+    elif linear_solver == "sparse" and ignore_singular:
+        problems.append("ignore_singular = True needs the dense linear solver (Exudyn implements "
+                        "ignoreSingularJacobian for dense matrices only), not linear_solver = 'sparse'")
+    if isinstance(newton_tolerance, bool) or not isinstance(newton_tolerance, (int, float)) \
+            or not 0 < newton_tolerance < 1:
+        problems.append(f"newton_tolerance = {newton_tolerance!r} must be a number in (0, 1)")
     for name, value in (("t_end", t_end), ("h", h), ("eps", eps)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
             problems.append(f"{name} = {value!r} must be a finite number > 0")
@@ -150,7 +181,8 @@ def check_arguments(t_end: float, h: float, solver: str, output_step: float | No
 
 
 def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
-                        configuration: str = "python", ignore_singular: bool = False) -> exu.SimulationSettings:
+                        configuration: str = "python", ignore_singular: bool = False,
+                        linear_solver: str = "dense", newton_tolerance: float = NEWTON_TOLERANCE) -> exu.SimulationSettings:
     """Exudyn settings of a fixed-step run; writes no files.
 
     Parameters
@@ -174,6 +206,9 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
         Exudyn's documented option for redundant constraints and singular poses
         (``linearSolver.ignoreSingularJacobian``, Exudyn example fourBarMechanism3D.py): a singular
         Newton matrix is factorized anyway, the redundant equations left out, instead of stopping.
+    linear_solver : one of LINEAR_SOLVERS
+        ``linearSolver.solverType`` (LINEAR_SOLVER_TYPES): 'dense' (EXUdense, Exudyn's default) or 'sparse'
+        (EigenSparse, for larger systems).
     """
     s = exu.SimulationSettings()
     ti = s.timeIntegration
@@ -181,8 +216,8 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
     ti.numberOfSteps = grid.n_steps
     ti.verboseMode = 0
     ti.adaptiveStep = False                  # fixed step h; a Newton failure raises
-    ti.newton.relativeTolerance = NEWTON_TOLERANCE
-    ti.newton.absoluteTolerance = NEWTON_TOLERANCE
+    ti.newton.relativeTolerance = newton_tolerance
+    ti.newton.absoluteTolerance = newton_tolerance
     ti.newton.useModifiedNewton = configuration == "tuned"   # else full Newton: Jacobian every iteration
     ti.newton.modifiedNewtonJacUpdatePerStep = configuration == "tuned"
     ti.newton.maxIterations = NEWTON_MAX_ITERATIONS
@@ -192,6 +227,7 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
         ti.generalizedAlpha.useIndex2Constraints = True
         ti.generalizedAlpha.useNewmark = True
     ti.computeLoadsJacobian = loads_jacobian
+    s.linearSolver.solverType = LINEAR_SOLVER_TYPES[linear_solver]
     s.linearSolver.ignoreSingularJacobian = bool(ignore_singular)
     s.solution.file.write = False            # no solution/coordinatesSolution.txt
     s.solution.sensors.writePeriod = 0.5 * grid.h   # < h: store every step (storage follows writePeriod)

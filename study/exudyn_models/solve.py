@@ -10,9 +10,9 @@ import numpy as np
 from study.results import SimulationResult, package_versions
 from study.exudyn_models.guards import GuideFriction, initialize, seed_reaction_guards
 from study.exudyn_models.building import Model
-from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, IMPLICIT_SOLVERS, NEWTON_TOLERANCE,
-                                          SOLVER_DESCRIPTIONS, SOLVER_TYPES, SPECTRAL_RADIUS, RunGrid,
-                                          check_arguments, exudyn_version, simulation_settings)
+from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, IMPLICIT_SOLVERS, LINEAR_SOLVER_DESCRIPTIONS,
+                                          NEWTON_TOLERANCE, SOLVER_DESCRIPTIONS, SOLVER_TYPES, SPECTRAL_RADIUS,
+                                          RunGrid, check_arguments, exudyn_version, simulation_settings)
 
 Array = np.ndarray
 
@@ -21,15 +21,18 @@ Array = np.ndarray
 # (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
 # ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
 def run_model(build, mechanism, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
-              eps: float, configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
+              eps: float, configuration: str = "python", ignore_singular: bool = False,
+              linear_solver: str = "dense", newton_tolerance: float = NEWTON_TOLERANCE) -> SimulationResult:
     """Build the model of a :class:`study.mechanisms.Mechanism` at its in-house consistent initial state, solve it,
     return its result."""
-    grid = check_arguments(t_end, h, solver, output_step, friction, eps, configuration)
+    grid = check_arguments(t_end, h, solver, output_step, friction, eps, configuration, linear_solver, ignore_singular,
+                           newton_tolerance)
     eom = mechanism.equations()
     state0 = mechanism.initial_state()
     built = build(mechanism, state0.q, state0.qd, friction, eps, configuration)
-    settings = simulation_settings(grid, solver, built.loads_jacobian, configuration, ignore_singular)
-    stats = {"configuration": configuration}
+    settings = simulation_settings(grid, solver, built.loads_jacobian, configuration, ignore_singular, linear_solver,
+                                   newton_tolerance)
+    stats = {"configuration": configuration, "linear_solver": linear_solver, "newton_tolerance": newton_tolerance}
     if solver in IMPLICIT_SOLVERS:
         stats.update(seed_reaction_guards(built.model, settings, built.frictions))
     stats.update(solve(built.model, settings, solver))
@@ -139,6 +142,8 @@ def assemble_result(eom, ps, grid: RunGrid, solver: str, eps: float, friction: s
         "solver_description": SOLVER_DESCRIPTIONS[solver],
         "configuration": stats.get("configuration", "python"),
         "configuration_description": CONFIGURATION_DESCRIPTIONS[stats.get("configuration", "python")],
+        "linear_solver": stats.get("linear_solver", "dense"),
+        "linear_solver_description": LINEAR_SOLVER_DESCRIPTIONS[stats.get("linear_solver", "dense")],
         "h": grid.h,
         "t_end": grid.t_end,
         "output_step": grid.h * grid.stride,
@@ -149,7 +154,7 @@ def assemble_result(eom, ps, grid: RunGrid, solver: str, eps: float, friction: s
         "parameter_hash": ps.sha256,
         "coordinate_names": list(eom.coordinate_names),
         "constraint_names": list(eom.constraint_names),
-        "newton_tolerance": NEWTON_TOLERANCE,
+        "newton_tolerance": stats.get("newton_tolerance", NEWTON_TOLERANCE),
         "spectral_radius": SPECTRAL_RADIUS if solver == "index3" else None,
         "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
         "work_integration": WORK_NOTE,

@@ -693,7 +693,8 @@ def _user_function(law: Law, read, torque: bool):
 
 def run(mechanism: Mechanism | ParameterSet, t_end: float, h: float, solver: str = "index3",
         output_step: float | None = None, friction: str = "regularized", eps: float = settings.DEFAULT_EPS,
-        configuration: str = "python", ignore_singular: bool = False) -> SimulationResult:
+        configuration: str = "python", ignore_singular: bool = False, linear_solver: str = "dense",
+        newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
     """Simulate a mechanism in Exudyn from the in-house consistent initial state.
 
     Parameters
@@ -714,14 +715,21 @@ def run(mechanism: Mechanism | ParameterSet, t_end: float, h: float, solver: str
         How Exudyn evaluates the load laws and iterates (settings.CONFIGURATIONS); both solve the same
         model, 'tuned' as Exudyn recommends for speed.
     ignore_singular : bool
-        Exudyn's option for redundant constraints / singular poses (settings.simulation_settings).
+        Exudyn's option for redundant constraints / singular poses (settings.simulation_settings); dense
+        linear solver only.
+    linear_solver : {'dense', 'sparse'}
+        The linear solver of Newton's iteration (settings.LINEAR_SOLVERS): Exudyn's dense inverse, or Eigen's
+        sparse LU, which Exudyn recommends for larger systems (e.g. the N-four-bar at N = 40).
+    newton_tolerance : float
+        Relative and absolute tolerance of Newton's iteration (default settings.NEWTON_TOLERANCE). A run whose
+        residual cannot reach it (a round-off floor at a singular pose) stops with exudyn.SolverError.
 
     Returns
     -------
     SimulationResult (see the module docstring for the mapping of every quantity)
     """
     return solve.run_model(build, as_mechanism(mechanism), t_end, h, solver, output_step, friction, eps, configuration,
-                           ignore_singular)
+                           ignore_singular, linear_solver, newton_tolerance)
 
 
 def initial_accelerations(mechanism: Mechanism | ParameterSet, q, qd, friction: str = "regularized",

@@ -185,10 +185,13 @@ def on_branch(ps: ParameterSet, q: np.ndarray) -> bool:
 
 
 def _on_branch(d: Description, q: np.ndarray) -> bool:
-    if d.branch is None:
-        return True
+    return d.branch is None or _branch_value(d, q) > 0
+
+
+def _branch_value(d: Description, q: np.ndarray) -> float:
+    """The description's branch condition evaluated at q (> 0 on the branch)."""
     expr = d.branch[0].xreplace({getattr(d.p, k): float(v) for k, v in d.values.items()})
-    return float(sp.lambdify([list(d.q)], expr, "math")(list(map(float, q)))) > 0
+    return float(sp.lambdify([list(d.q)], expr, "math")(list(map(float, q))))
 
 
 def initial_guess(ps: ParameterSet) -> tuple[np.ndarray, np.ndarray]:
@@ -233,7 +236,9 @@ def consistent_state(d: Description, ps: ParameterSet, eom: EquationsOfMotion, g
     guess[list(ic.independent)] = ic.q_independent
     state = consistent_initial_conditions(eom, guess, ic.independent, ic.qd_independent)
     if not _on_branch(d, state.q):
+        expr, label = d.branch
         raise InitialConditionError(
             f"{d.name}: Newton from the printed q(0) converged to q = {state.q}, which is not on the "
-            f"assembly branch '{ic.branch}'")
+            f"assembly branch '{label}' (the parameter file's '{ic.branch}'): its condition {expr} > 0 is "
+            f"{_branch_value(d, state.q):.6g} there; change the printed q(0) or the guess")
     return state

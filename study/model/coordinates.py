@@ -67,9 +67,35 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     if missing:
         raise DescriptionError(f"mechanism {d.name!r}: bodies {missing} cannot be placed from ground through "
                                f"revolute joints or prismatic joints with a travel (relative coordinates need a "
-                               f"tree of such joints), and have no position of their own (a free body)")
+                               f"tree of such joints), and have no position of their own (a free body): "
+                               + "; ".join(_why_unplaced(d, b, poses) for b in missing))
+    unused = [str(c) for c, qc in zip(d.coordinate_names, d.q)
+              if not any(qc in (r.free_symbols | a.free_symbols) for name, (r, a) in poses.items() if name != GROUND)]
+    if unused:
+        raise DescriptionError(f"mechanism {d.name!r}: coordinates {unused} move no body (no body's angle or "
+                               f"position depends on them, directly or through a joint's travel), so they are no "
+                               f"degrees of freedom of the mechanism")
     cut = [j for j in d.joints if j.name not in tree]
     return poses, cut
+
+
+def _why_unplaced(d: Description, body: str, poses) -> str:
+    """Why no joint places a body in relative coordinates: its joints, each with the reason it places nothing."""
+    reasons = []
+    for j in d.joints:
+        ends = (j.a, j.b) if isinstance(j, (Revolute, Distance)) else (j.guide, j.slider)
+        if body not in (ends[0][0], ends[1][0]):
+            continue
+        other = ends[1][0] if ends[0][0] == body else ends[0][0]
+        if isinstance(j, Distance):
+            reasons.append(f"{j.name!r} is a distance joint (a constraint row, never a tree joint)")
+        elif isinstance(j, Revolute) and j.cut:
+            reasons.append(f"{j.name!r} is marked cut=True")
+        elif isinstance(j, Prismatic) and j.travel is None:
+            reasons.append(f"{j.name!r} is a prismatic joint without a travel")
+        elif other not in poses:
+            reasons.append(f"{j.name!r} joins it to {other!r}, which is not placed either")
+    return f"body {body!r}: " + ("; ".join(reasons) if reasons else "no joint has it at an end")
 
 
 def _tree_ends(j: Revolute | Prismatic) -> tuple:
@@ -145,7 +171,11 @@ def poses(d: Description, coordinates: str) -> tuple[sp.Matrix, sp.Matrix, dict,
 
 
 def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
-    """The body-level builder of a description in ``coordinates`` ('relative' or 'absolute')."""
+    """The body-level builder of a description in ``coordinates`` ('relative' or 'absolute').
+
+    Raises DescriptionError for what :meth:`Description.validate` reports, for a body the relative coordinates cannot
+    place (naming its joints and why each places nothing), a relative coordinate that moves no body, and fewer
+    than one degree of freedom (coordinates minus constraint rows, naming the joints that have rows)."""
     d.validate()
     q, qd, placed, joints = poses(d, coordinates)
     names = d.coordinate_names if coordinates == "relative" else absolute_names(d)
@@ -164,8 +194,10 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
     subs = _inputs(d, placed, q, qd)
     for pot in d.potentials:
         b.potential(pot.name, pot.energy.xreplace(subs))
+    counts = []   # (joint, number of its rows)
     for jnt in joints:
         rows = joint_rows(d, placed, jnt)
+        counts.append((jnt.name, len(rows)))
         if isinstance(jnt, Prismatic) and jnt.friction is not None:
             (gap_name, _), rest = rows[0], rows[1:]   # the contact writes the same gap row itself
             normal = tuple(jnt.normal)          # guide fixed in ground: global = guide frame
@@ -178,6 +210,12 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
         else:
             for row in rows:
                 b.constraint(*row)
+    m, r = len(names), len(b.constraints)
+    if r >= m:
+        held = ", ".join(f"{n!r} ({_count(k, 'row')})" for n, k in counts if k)
+        raise DescriptionError(f"mechanism {d.name!r}: in {coordinates} coordinates, {_count(m, 'coordinate')} and "
+                               f"{_count(r, 'constraint row')} (joints {held}) leave {m - r} degrees of freedom; a "
+                               f"mechanism needs at least one (a joint too many, or a coordinate too few)")
     for name_, expr, mode in d.switches:
         b.switch(name_, expr.xreplace(subs), mode)
     for load in d.loads:
@@ -187,3 +225,7 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
         else:
             b.force(load.name, points[(load.body, load.point)], *comps)
     return b
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")

@@ -294,7 +294,12 @@ class Description:
 
     # --- checks ------------------------------------------------------------------------------
     def validate(self) -> None:
-        """Report every problem of the description in one DescriptionError."""
+        """Report every problem of the description in one DescriptionError, each naming its body, joint, load, point
+        or input and why: unknown bodies and points, a joint between a body and itself, a body that no joint places
+        and that has no position, a mass or inertia that is not positive (a number, or with the parameter values),
+        symbols that are not the description's in a load law, potential, switch or the assembly branch. What needs
+        the coordinate set (the placement tree, the degrees of freedom) is checked by
+        :func:`study.model.coordinates.lower`."""
         problems = []
         params = set(vars(self.p).values())
         if not self.bodies:
@@ -304,21 +309,36 @@ class Description:
         if dup:
             problems.append(f"duplicate joint or load names: {dup}")
 
-        def check_point(where: str, ref: tuple[str, str]) -> None:
+        def point_problem(ref: tuple[str, str]) -> str | None:
             body, point = ref
             if body == GROUND:
-                if point not in self.ground_points:
-                    problems.append(f"{where}: unknown ground point {point!r}")
-            elif body not in self.bodies:
-                problems.append(f"{where}: unknown body {body!r}")
-            elif point not in self.bodies[body].points:
-                problems.append(f"{where}: body {body!r} has no point {point!r} (has {sorted(self.bodies[body].points)})")
+                return None if point in self.ground_points else f"unknown ground point {point!r}"
+            if body not in self.bodies:
+                return f"unknown body {body!r}"
+            if point not in self.bodies[body].points:
+                return f"body {body!r} has no point {point!r} (has {sorted(self.bodies[body].points)})"
+            return None
 
+        def check_point(where: str, ref: tuple[str, str]) -> None:
+            problem = point_problem(ref)
+            if problem:
+                problems.append(f"{where}: {problem}")
+
+        values = {getattr(self.p, k): sp.Float(v) for k, v in self.values.items()}
         for b in self.bodies.values():
             for key, e in (("mass", b.mass), ("inertia", b.inertia)):
                 if e.free_symbols - params:
                     problems.append(f"body {b.name!r}.{key} uses symbols other than parameters: "
                                     f"{sorted(map(str, e.free_symbols - params))}")
+                    continue
+                value = e.xreplace(values)   # a number: no other symbols (reported above)
+                if not (value.is_extended_positive and value.is_finite):
+                    finite = bool(value.is_real and value.is_finite)
+                    shown = f"{float(value):g}" if finite else str(value)
+                    given = "" if e.is_number else f" ({e} with the parameter values)"
+                    problems.append(f"body {b.name!r}.{key} = {shown}{given} is not "
+                                    f"{'positive' if finite else 'a finite positive number'} (a body needs a positive "
+                                    f"mass and centroidal inertia)")
             for key, e in (("angle", b.angle), *((f"position[{i}]", x) for i, x in enumerate(b.position or ()))):
                 stray = e.free_symbols - params - set(self.q)
                 if stray:
@@ -327,7 +347,14 @@ class Description:
                 for e in xy:
                     if e.free_symbols - params:
                         problems.append(f"point {b.name}.{pname} must be constant in the body frame")
+        joined = set()
         for j in self.joints:
+            ends = (j.a[0], j.b[0]) if isinstance(j, (Revolute, Distance)) else (j.slider[0], j.guide[0])
+            joined.update(ends)
+            if ends[0] == ends[1]:
+                what = "ground to itself" if ends[0] == GROUND else f"body {ends[0]!r} to itself"
+                problems.append(f"joint {j.name!r} joins {what} (a joint connects two different bodies, or a body "
+                                f"and ground)")
             if isinstance(j, (Revolute, Distance)):
                 check_point(f"joint {j.name!r}", j.a)
                 check_point(f"joint {j.name!r}", j.b)
@@ -349,6 +376,10 @@ class Description:
                     if j.friction is not None:
                         problems.append(f"joint {j.name!r}: a joint with friction cannot have a travel (its normal "
                                         f"force is the multiplier of its gap row, which a tree joint does not have)")
+        for b in self.bodies.values():
+            if b.position is None and b.name not in joined:
+                problems.append(f"body {b.name!r}: no joint places it and it has no position of its own (join it to "
+                                f"ground or to another body, or give a free body position=(x, y))")
         allowed = params | set(self.inputs) | {self.t} | {m for _, _, m in self.switches}
         for ld in self.loads:
             if ld.body not in self.bodies:
@@ -358,16 +389,43 @@ class Description:
             for e in ld.components:
                 stray = e.free_symbols - allowed
                 if stray:
-                    problems.append(f"load {ld.name!r} uses unknown symbols {sorted(map(str, stray))}")
+                    problems.append(f"load {ld.name!r} uses unknown symbols {sorted(map(str, stray))} (a load law is "
+                                    f"an expression of parameters, the description's inputs, t and switch modes)")
+        static = params | {s for s, inp in self.inputs.items() if inp.kind in ("x", "y", "angle")}
+        for pot in self.potentials:
+            stray = pot.energy.free_symbols - static
+            if stray:
+                problems.append(f"potential {pot.name!r} uses unknown symbols {sorted(map(str, stray))} (a potential "
+                                f"is an expression of parameters and position or angle inputs)")
         for name, e, _ in self.switches:
             stray = e.free_symbols - params - set(self.inputs) - {self.t}
             if stray:
                 problems.append(f"switch {name!r} uses unknown symbols {sorted(map(str, stray))}")
-        for inp in self.inputs.values():
-            if inp.point is None and inp.body not in self.bodies:
-                problems.append(f"input {inp.kind} of unknown body {inp.body!r}")
-            elif inp.point is not None:
-                check_point(f"input {inp.kind}", (inp.body, inp.point))
+        users: dict[sp.Symbol, list[str]] = {}   # input symbol -> the loads, potentials and switches that use it
+        for who, exprs in ([(f"load {ld.name!r}", ld.components) for ld in self.loads]
+                           + [(f"potential {pt.name!r}", (pt.energy,)) for pt in self.potentials]
+                           + [(f"switch {n!r}", (e,)) for n, e, _ in self.switches]):
+            for sym in set().union(*(e.free_symbols for e in exprs)) & set(self.inputs):
+                users.setdefault(sym, []).append(who)
+        bad_inputs: dict[tuple, tuple[dict, dict]] = {}   # (target, problem) -> (kinds, users): one entry per point
+        for sym, inp in self.inputs.items():
+            if inp.point is None:
+                problem = None if inp.body in self.bodies else f"unknown body {inp.body!r}"
+                of = f"of {inp.body!r}"
+            else:
+                problem = point_problem((inp.body, inp.point))
+                of = f"of point {inp.body}.{inp.point}"
+            if problem:
+                kinds, who = bad_inputs.setdefault((of, problem), ({}, {}))
+                kinds[inp.kind] = None
+                who.update(dict.fromkeys(users.get(sym, [])))
+        for (of, problem), (kinds, who) in bad_inputs.items():
+            problems.append(f"{', '.join(who) or 'an unused input'}: input {', '.join(kinds)} {of}: {problem}")
+        if self.branch is not None:
+            stray = self.branch[0].free_symbols - params - set(self.q)
+            if stray:
+                problems.append(f"assembly branch {self.branch[1]!r} uses unknown symbols {sorted(map(str, stray))} "
+                                f"(a branch condition is an expression of q and parameters)")
         if problems:
             raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
 

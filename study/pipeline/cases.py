@@ -264,7 +264,7 @@ def _check_case(case: Case, where: str) -> None:
     try:
         arguments.number("repeat", options.pop("repeat", 1), whole=True)
         if case.engine == "exudyn":
-            _check_exudyn_options(options)
+            _check_exudyn_options(options, case.t_end)
         else:
             _check_inhouse_options(options, case.t_end)
     except ValueError as exc:
@@ -297,11 +297,11 @@ def _check_inhouse_options(options: dict, t_end: float) -> None:
                          f"samples, more output than max_output_bytes = {tolerance('max_output_bytes'):g} bytes allows")
 
 
-def _check_exudyn_options(options: dict) -> None:
+def _check_exudyn_options(options: dict, t_end: float) -> None:
     import inspect
 
     from study.exudyn_models import run
-    from study.exudyn_models.settings import CONFIGURATIONS, FRICTION_MODES, SOLVERS
+    from study.exudyn_models.settings import check_arguments
 
     declared = dict(list(inspect.signature(run).parameters.items())[2:])   # after ps and t_end
     unknown = sorted(set(options) - set(declared))
@@ -309,12 +309,9 @@ def _check_exudyn_options(options: dict) -> None:
         raise ValueError(f"{', '.join(unknown)}: not an option of an Exudyn case; valid options: {', '.join(declared)}")
     given = {k: p.default for k, p in declared.items() if p.default is not p.empty} | options
     arguments.number("h", given.get("h"))
-    arguments.number("output_step", given["output_step"], optional=True)
-    arguments.number("eps", given["eps"])
-    arguments.choice("solver", given["solver"], SOLVERS)
-    arguments.choice("friction", given["friction"], FRICTION_MODES)
-    arguments.choice("configuration", given["configuration"], CONFIGURATIONS)
     arguments.flag("ignore_singular", given["ignore_singular"])
+    check_arguments(t_end, given["h"], given["solver"], given["output_step"], given["friction"], given["eps"],
+                    given["configuration"], given["linear_solver"], given["ignore_singular"], given["newton_tolerance"])
 
 
 def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case]:

@@ -37,7 +37,9 @@ _STOPPED_AT = re.compile(r"t = ([0-9.eE+-]+) s")
 def _method(case: Case) -> str:
     o = case.kwargs
     if case.engine == "exudyn":
-        return f"{o['solver']}" + (" + ignoreSingularJacobian" if o.get("ignore_singular") else "")
+        return (f"{o['solver']}" + (" + ignoreSingularJacobian" if o.get("ignore_singular") else "")
+                + (" + EigenSparse" if o.get("linear_solver") == "sparse" else "")
+                + (f", Newton tolerance {o['newton_tolerance']:g}" if "newton_tolerance" in o else ""))
     if o.get("integrator") == "ALI3P":
         return "ALI3P (index-3 augmented Lagrangian)"
     return f"{o['acceleration_solver']} + {o.get('method', 'none')}"
