@@ -12,6 +12,7 @@ from threadpoolctl import threadpool_limits
 from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
+from study.fast.support import SCIPY_STEPS_ONLY
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
@@ -40,8 +41,6 @@ FIXED_STEP = ("RK4", INDEX3)
 # Right-hand-side evaluations a fixed step takes, at least: RK4's four stages; ALI3P's Newton iterations
 # (two where the step converges at once; more at singular positions).
 EVALUATIONS_PER_STEP = {"RK4": 4, INDEX3: 2}
-# Integrators whose steps only scipy takes: on backend 'compiled' scipy's loop runs on compiled evaluations.
-SCIPY_STEPS_ONLY = ("Radau", "LSODA")
 
 
 def resolve(eom_or_mechanism, variant: str | None):
@@ -199,6 +198,10 @@ def simulate(
                          f"({', '.join(eom.indicator_names) or 'its indicators'}): use an ODE integrator (e.g. 'RK45')")
     acceleration_solver = ("augmented_lagrangian" if index3 else "multiplier") if acceleration_solver is None \
         else acceleration_solver
+    if backend == "compiled":   # before anything compiles: importing the compiled path compiles its kernels
+        from study.fast.support import check_supported
+
+        check_supported(integrator, acceleration_solver, progress)
     min_rtol = tolerance("integrator_min_rtol")
     scipy_steps = backend == "reference" or integrator in SCIPY_STEPS_ONLY
     if scipy_steps and integrator not in FIXED_STEP and rtol < min_rtol:
@@ -266,9 +269,8 @@ def simulate(
 
     rhs = None
     if backend == "compiled":
-        from study.fast import check_supported, compiled_rhs
+        from study.fast import compiled_rhs
 
-        check_supported(integrator, acceleration_solver)
         rhs = compiled_rhs(eom, mech, dyn)
     guard = RunGuard(dyn, monitor, max_evaluations, step if integrator in FIXED_STEP else None, float(t_end), rhs)
     cpu0 = time.process_time()

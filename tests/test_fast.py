@@ -251,3 +251,19 @@ def test_switches_at_loose_tolerances_as_on_the_reference_path(integrator, rtol)
     assert fast.stats["events"] == ref.stats["events"] > 0
     bound = 2 * tolerance("adaptive_global_error_factor") * rtol * np.abs(ref.q).max()
     assert np.abs(fast.q - ref.q).max() <= bound
+
+
+def test_what_the_compiled_backend_cannot_do_is_refused_before_it_compiles():
+    """Importing the compiled frontend compiles its kernels (a minute on a cold cache); a refused run must not pay
+    it. A fresh interpreter, so that no other test has imported the frontend."""
+    import subprocess
+    import sys
+
+    code = ("import sys, study\n"
+            "try:\n"
+            "    study.simulate('quick_return', backend='compiled', acceleration_solver='augmented_lagrangian')\n"
+            "except ValueError as exc:\n"
+            "    print(exc)\n"
+            "print('study.fast.frontend' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120).stdout
+    assert "does not support acceleration_solver='augmented_lagrangian'" in out and out.split()[-1] == "False"

@@ -3,7 +3,7 @@
 The cart is a free body placed by its own coordinates (x, y: its centre of mass); the rail is a prismatic joint to
 ground without a travel, so it is a cut joint: its gap row y = 0 holds the cart on the rail, and that row's
 multiplier is the normal force which the Coulomb friction (``study.Friction``, mu_s = mu_k = mu) scales. (Friction
-is supported only there: on a prismatic joint whose guide is fixed in ground and which has no travel.) The
+needs a prismatic joint without a travel; its guide may be ground, as here, or a moving body.) The
 pendulum, a uniform rod, is hinged to the cart at its top end; its angle th (from the downward vertical) is a
 coordinate and the hinge places it from the cart (a tree joint). Vertical plane, gravity -y.
 

@@ -37,33 +37,47 @@ class ReactionGuard:
             return self.accepted
         return live
 
+    def peek(self, mbs) -> float:
+        """The value :meth:`value` returns, without counting the call (a second load reading the same reaction)."""
+        live = self.read(mbs)
+        return self.accepted if live == 0.0 and self.accepted is not None else live
+
     def accept(self, mbs, t=None) -> None:
         self.accepted = self.read(mbs)
 
 
 class GuideFriction:
-    """Regularized Coulomb friction plus constant resistance at a point sliding along a fixed axis.
+    """Regularized Coulomb friction plus constant resistance at a point sliding along a guide's axis.
 
-    Tangential force on the slider at its point (along the unit ``axis``, global frame):
-    ``coulomb = -mu |N| tanh(v/eps)``, ``resistance = -F tanh(v/eps)``, with v = axis . (velocity of
-    the slider point, from the point's marker) and N the guide's normal reaction from ``guard``. The
-    values of the last user-function call of each step (the converged residual evaluation) are recorded
-    in ``history`` (one row per step plus the initial-acceleration solve at t = 0):
+    Tangential force on the slider at its point (along the unit axis, global frame):
+    ``coulomb = -mu |N| tanh(v/eps)``, ``resistance = -F tanh(v/eps)``, with N the guide's normal reaction from
+    ``guard`` and v the sliding velocity along the axis. A guide fixed in ground (``guide`` None): ``axis`` is
+    global and v = axis . (velocity of the slider point, from the point's marker). A moving guide, ``guide`` =
+    (node, reference angle, marker at its centre of mass): ``axis`` is in the guide's frame and turns with it,
+    v = axis . (v_S - v_G*) with v_G* = v_G + omega k x (r_S - r_G) the velocity of the guide's material point
+    at the slider point, and the guide carries the opposite force at that point, applied as the force
+    :meth:`guide_force` at its centre of mass and the torque :meth:`guide_torque` of its lever (the same load on
+    a rigid body). The values of the last slider user-function call of each step (the converged residual
+    evaluation) are recorded in ``history`` (one row per step plus the initial-acceleration solve at t = 0):
     [N used, v, coulomb, resistance].
     """
 
     def __init__(self, model: Model, marker: int, axis, guard: ReactionGuard, mu: float, resistance: float,
-                 eps: float):
+                 eps: float, guide: tuple[int, float, int] | None = None):
         self.marker = marker
         self.axis = (float(axis[0]), float(axis[1]))
         self.guard = guard
         self.mu, self.resistance, self.eps = float(mu), float(resistance), float(eps)
+        self.guide = guide
         self.last = (float("nan"),) * 4
         self.history: list[tuple[float, ...]] = []
         model.pre_step.append(self._pre_step)
         model.post_step.append(self._post_step)
 
     def __call__(self, mbs, t, load_vector):
+        if self.guide is not None:
+            f, axis, _ = self._moving(mbs, record=True)
+            return [f * axis[0], f * axis[1], 0.0]
         vel = mbs.GetMarkerOutput(self.marker, OVT.Velocity)
         v = self.axis[0] * vel[0] + self.axis[1] * vel[1]
         n = self.guard.value(mbs)
@@ -72,6 +86,34 @@ class GuideFriction:
         self.last = (n, v, coulomb, resistance)
         f = coulomb + resistance
         return [f * self.axis[0], f * self.axis[1], 0.0]
+
+    def _moving(self, mbs, record: bool):
+        """(tangential force f on the slider, global axis, lever r_S - r_G) at the current state, moving guide."""
+        node, reference, com = self.guide
+        angle = reference + mbs.GetNodeOutput(node, OVT.Coordinates)[2]
+        omega = mbs.GetNodeOutput(node, OVT.AngularVelocity)[2]
+        c, s_ = math.cos(angle), math.sin(angle)
+        axis = (c * self.axis[0] - s_ * self.axis[1], s_ * self.axis[0] + c * self.axis[1])
+        rs, vs = mbs.GetMarkerOutput(self.marker, OVT.Position), mbs.GetMarkerOutput(self.marker, OVT.Velocity)
+        rg, vg = mbs.GetMarkerOutput(com, OVT.Position), mbs.GetMarkerOutput(com, OVT.Velocity)
+        lever = (rs[0] - rg[0], rs[1] - rg[1])
+        v = axis[0] * (vs[0] - vg[0] + omega * lever[1]) + axis[1] * (vs[1] - vg[1] - omega * lever[0])
+        n = self.guard.value(mbs) if record else self.guard.peek(mbs)
+        s = math.tanh(v / self.eps)
+        coulomb, resistance = -self.mu * abs(n) * s, -self.resistance * s
+        if record:
+            self.last = (n, v, coulomb, resistance)
+        return coulomb + resistance, axis, lever
+
+    def guide_force(self, mbs, t, load_vector):
+        """The reaction on a moving guide at its centre of mass: minus the slider's force (global frame)."""
+        f, axis, _ = self._moving(mbs, record=False)
+        return [-f * axis[0], -f * axis[1], 0.0]
+
+    def guide_torque(self, mbs, t, load_vector):
+        """The moment of the reaction about the guide's centre of mass: (r_S - r_G) x (-f axis)."""
+        f, axis, lever = self._moving(mbs, record=False)
+        return [0.0, 0.0, -f * (lever[0] * axis[1] - lever[1] * axis[0])]
 
     def _pre_step(self, mbs, t) -> None:
         if not self.history:           # before the first step: the initial-acceleration evaluation

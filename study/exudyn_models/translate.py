@@ -37,9 +37,12 @@ Model
 * Potentials (springs): user-function torques / forces = minus the gradient of the energy with
   respect to the angle and point-position inputs; their energy is part of the result's potential.
 * Friction: a prismatic joint with :class:`~study.model.joints.Friction` data whose kinetic
-  coefficient or resistance is > 0 (guide fixed in ground) gets the regularized Coulomb law of
+  coefficient or resistance is > 0 gets the regularized Coulomb law of
   :class:`~study.exudyn_models.guards.GuideFriction` along the guide's axis, with N read from the
   joint through a :class:`~study.exudyn_models.guards.ReactionGuard`; ``friction='none'`` leaves it out.
+  On a moving guide the axis turns with the guide, the sliding velocity is relative to the guide's point
+  under the slider, and the guide carries the opposite force (a force at its centre of mass and the torque
+  of its lever: the same load as the force at the slider point).
 
 Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
 ---------------------------------------------------------------------------
@@ -635,10 +638,15 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
             # N = force on the slider along the normal = -(ForceLocal . n) (= -lam); only |N| enters
             guard = ReactionGuard(lambda mbs, o=obj, n=n: -(lambda f: f[0] * n[0] + f[1] * n[1])(
                 mbs.GetObjectOutput(o, OVT.ForceLocal)))
-            axis = (val(j.axis[0]), val(j.axis[1]))       # guide fixed in ground: global = guide frame
+            axis = (val(j.axis[0]), val(j.axis[1]))       # guide frame (= global on a guide fixed in ground)
+            moving = j.guide[0] != GROUND
             fric = GuideFriction(model, marker(*j.slider), axis, guard, mu=val(j.friction.mu_kinetic),
-                                 resistance=val(j.friction.resistance), eps=eps)
+                                 resistance=val(j.friction.resistance), eps=eps,
+                                 guide=(model.node(j.guide[0]), refs[j.guide[0]], com(j.guide[0])) if moving else None)
             model.force(marker(*j.slider), user=fric)
+            if moving:   # the opposite force on the guide at the slider point: at its centre of mass, plus its moment
+                model.force(com(j.guide[0]), user=fric.guide_force)
+                model.torque(com(j.guide[0]), user=fric.guide_torque)
             built.frictions_by_contact[j.name] = fric
             built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
                                                       "mbs.GetObjectOutput; no Exudyn element or symbolic user "

@@ -5,9 +5,11 @@
 cache
     Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``.
 signatures
-    The numba function types shared by the generated code, the stabilization methods and the kernels.
+    The numba function types shared by the generated code, the stabilization methods, the friction
+    treatments and the kernels.
 signs
-    The compiled sgn approximations (sliding-mode bias, friction laws).
+    The sgn approximations by name, one numba function each for both backends (sliding-mode bias,
+    friction laws).
 codegen
     sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``);
     the load laws are the description's expressions, compiled with the rest.
@@ -17,7 +19,7 @@ user
     A user's EquationsOfMotion compiled from its callables.
 dynamics
     Constraint right-hand side (each stabilization's own compiled bias), multiplier solve, the coupled
-    normal-force/friction solve, the right-hand side.
+    normal-force/friction solve (each friction treatment's own compiled phases), the right-hand side.
 steppers
     RK23/RK45/DOP853 (scipy's tableaus and error control) and RK4 steps with their dense output.
 loop
@@ -29,12 +31,12 @@ frontend
 
 from study.fast import cache as _cache  # noqa: F401  (sets numba's cache folder before any kernel is defined)
 
-__all__ = ["CompiledModel", "check_supported", "compiled_model", "compiled_rhs", "simulate_compiled"]
+__all__ = ["CompiledModel", "compiled_model", "compiled_rhs", "simulate_compiled"]
 
 
 def __getattr__(name: str):
-    """The frontend's names, imported when first asked for: the stabilization methods' compiled forms
-    (study.solver.stabilization) import study.fast.signs and .signatures, and the frontend imports them."""
+    """The frontend's names, imported when first asked for: the compiled forms of the stabilization methods and
+    friction treatments (study.solver) import study.fast.signs and .signatures, and the frontend imports them."""
     if name in __all__:
         from study.fast import frontend
 

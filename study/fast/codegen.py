@@ -78,11 +78,10 @@ def _evaluate(b, eqs: SymbolicEquations, params) -> list[str]:
         for j in range(m):
             targets.append((f"J[{i}, {j}]", eqs.phi_q[i, j]))
         targets.append((f"gamma[{i}]", eqs.gamma[i]))
-    for k, c in enumerate(b.contacts):
-        jac, bias = eqs.point_jacobians[c.point.name], eqs.point_bias[c.point.name]
+    for k, c in enumerate(b.contacts):   # J_t and Jdot_t qd (relative to a moving guide), study.model.derive
         for j in range(m):
-            targets.append((f"Jt[{k}, {j}]", c.tangent[0] * jac[0, j] + c.tangent[1] * jac[1, j]))
-        targets.append((f"bt[{k}]", c.tangent[0] * bias[0] + c.tangent[1] * bias[1]))
+            targets.append((f"Jt[{k}, {j}]", eqs.contact_jacobians[c.name][0, j]))
+        targets.append((f"bt[{k}]", eqs.contact_bias[c.name]))
     for k, g in enumerate(eqs.loads.values()):   # the power of each load, in the reference's work order
         targets.append((f"powers[{k}]", sum((g[j] * b.qd[j] for j in range(m)), sp.Integer(0))))
     cse_lines, printed = _cse_block([e for _, e in targets])

@@ -9,6 +9,9 @@ with the contacts' tangential forces f found per normal-force sign hypothesis by
 (see the reference module's docstring; the hypotheses are visited in the same order and the same
 consistency rule picks exactly one, else a Painleve status is returned).
 
+The laws arrive as compiled functions of their classes, passed as first-class functions: the
+stabilization's ``compiled_bias`` (``study.solver.stabilization``) and the friction treatment's
+``compiled_phases`` (``study.solver.friction.laws``: stick flags and slip factors of the contacts).
 Options travel in two arrays, ``ci`` (int64) and ``cf`` (float64), whose layout is given by the
 ``CI_*`` / ``CF_*`` constants below and packed by ``study.fast.frontend``. State y = [q, qd, W_loads,
 W_friction (only with friction)], as in the reference.
@@ -22,17 +25,17 @@ import numpy as np
 from numba import njit, types
 
 from study.fast.linalg import lu_factor, lu_solve
-from study.fast.signatures import BIAS_T, EVALUATE_T, I1, V1, f8
-from study.fast.signs import sign_function
+from study.fast.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
 from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
 
 # --- option layout ---------------------------------------------------------------------------
-FRICTION_NONE, FRICTION_EXACT, FRICTION_REGULARIZED, FRICTION_SIGN = 0, 1, 2, 3
-CI_PROJECTS, CI_BIAS, CI_FRICTION, CI_FRICTION_SGN, CI_PROJ_MASS, CI_PROJ_MAXITER, CI_NLOADMODE, CI_CONTACT0 = range(8)
-CF_FRICTION_EPS, CF_PROJ_TOL, CF_HEADER = 0, 1, 2
+CI_PROJECTS, CI_BIAS, CI_FRICTION, CI_SWITCHED, CI_PHASES = range(5)
+CI_PROJ_MASS, CI_PROJ_MAXITER, CI_NLOADMODE, CI_CONTACT0 = range(5, 9)
+CF_PROJ_TOL, CF_HEADER = 0, 1
 # ci: CI_PROJECTS 1 if the stabilization projects after each step; CI_BIAS the offset of its bias parameters in cf;
-# ci ends with the dimensions (nw, nc, r, m): see dimensions()
-# cf after the header: mu_kinetic (nc), mu_static (nc), resistance (nc), then the bias parameters
+# CI_FRICTION 1 with a friction treatment, CI_SWITCHED 1 if it is switched (stick/slip entries in the mode, located
+# switches), CI_PHASES the offset of its parameters in cf; ci ends with the dimensions (nw, nc, r, m): see dimensions()
+# cf after the header: mu_kinetic (nc), mu_static (nc), resistance (nc), the bias parameters, the friction parameters
 
 # status codes
 OK, SINGULAR, PAINLEVE_NONE, PAINLEVE_MANY = 0, 1, 2, 3
@@ -79,19 +82,9 @@ def constraint_rhs(bias, ci, cf, ws):
         ws.c[i] = ws.gamma[i] + ws.c[i]
 
 
-@njit(cache=True)
-def _phases(ci, cf, mode, ws):
-    """Stick flags and slip factors s of the contacts (exact: from the mode; else the sgn law of v_t)."""
-    nc = ws.Jt.shape[0]
-    kind, nlm = ci[CI_FRICTION], ci[CI_NLOADMODE]
-    for j in range(nc):
-        if kind == FRICTION_EXACT:
-            ws.stick[j] = mode[nlm + 2 * j] > 0
-            ws.s[j] = 0.0 if ws.stick[j] else float(mode[nlm + 2 * j + 1])
-        else:
-            ws.stick[j] = False
-            sgn = ci[CI_FRICTION_SGN] if kind == FRICTION_REGULARIZED else 0
-            ws.s[j] = sign_function(sgn, ws.vt[j], cf[CF_FRICTION_EPS])
+@njit(PHASES, cache=True)
+def no_phases(mode, nlm, vt, cf, off, stick, s):
+    """The ``phases`` argument of a run without friction (not called)."""
 
 
 @njit(cache=True)
@@ -196,7 +189,7 @@ def _friction(ci, cf, ws, m, r):
 
 
 @njit(cache=True)
-def accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws):
+def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
     """qdd, lambda (and with friction f, v_t, N) at the state in ws.q, ws.qd; returns a status code."""
     evaluate(t, ws.q, ws.qd, mode, p, lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
     ws.counters[0] += 1
@@ -223,7 +216,7 @@ def accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws):
         ws.qdd[i] = ws.x[i]
     for k in range(r):
         ws.lam[k] = ws.x[m + k]
-    if ci[CI_FRICTION] == FRICTION_NONE:
+    if ci[CI_FRICTION] == 0:
         return OK
     nc = ws.Jt.shape[0]
     for j in range(nc):
@@ -231,32 +224,32 @@ def accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws):
         for i in range(m):
             v += ws.Jt[j, i] * ws.qd[i]
         ws.vt[j] = v
-    _phases(ci, cf, mode, ws)
+    phases(mode, ci[CI_NLOADMODE], ws.vt, cf, ci[CI_PHASES], ws.stick, ws.s)
     return _friction(ci, cf, ws, m, r)
 
 
 @njit(cache=True)
-def rhs(evaluate, bias, t, y, mode, p, lp, ci, cf, ws, dy):
+def rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, dy):
     """dy = [qd, qdd, load powers, friction powers f_j v_t,j]; returns a status code."""
     m = ws.q.size
     for i in range(m):
         ws.q[i] = y[i]
         ws.qd[i] = y[m + i]
-    status = accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws)
+    status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
     for i in range(m):
         dy[i] = ws.qd[i]
         dy[m + i] = ws.qdd[i]
     nw = ws.powers.size
     for k in range(nw):
         dy[2 * m + k] = ws.powers[k]
-    if ci[CI_FRICTION] != FRICTION_NONE:
+    if ci[CI_FRICTION] == 1:
         for j in range(ws.Jt.shape[0]):
             dy[2 * m + nw + j] = ws.f[j] * ws.vt[j]
     return status
 
 
-@njit(types.int64(EVALUATE_T, BIAS_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
-def accelerations_entry(evaluate, bias, t, q, qd, mode, p, lp, ci, cf, out, repeat):
+@njit(types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
+def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat):
     """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f]. For tests and timing."""
     m, r, nc, nw = dimensions(ci)
     ws = workspace(m, r, nc, nw)
@@ -265,20 +258,20 @@ def accelerations_entry(evaluate, bias, t, q, qd, mode, p, lp, ci, cf, out, repe
         for i in range(m):
             ws.q[i] = q[i]
             ws.qd[i] = qd[i]
-        status = accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws)
+        status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
     for i in range(m):
         out[i] = ws.qdd[i]
     for k in range(r):
         out[m + k] = ws.lam[k]
-    if ci[CI_FRICTION] != FRICTION_NONE:
+    if ci[CI_FRICTION] == 1:
         for j in range(nc):
             out[m + r + j] = ws.normal[j]
             out[m + r + nc + j] = ws.f[j]
     return status
 
 
-@njit(types.int64(EVALUATE_T, BIAS_T, f8, V1, I1, V1, V1, I1, V1, V1), cache=True)
-def rhs_entry(evaluate, bias, t, y, mode, p, lp, ci, cf, dy):
+@njit(types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1), cache=True)
+def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy):
     """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators; returns a status code."""
     m, r, nc, nw = dimensions(ci)
-    return rhs(evaluate, bias, t, y, mode, p, lp, ci, cf, workspace(m, r, nc, nw), dy)
+    return rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, workspace(m, r, nc, nw), dy)

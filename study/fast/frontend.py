@@ -29,12 +29,12 @@ from study.fast.cache import compile_lock
 from study.fast.codegen import generated_module
 
 with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
-    from study.fast.dynamics import (FRICTION_EXACT, FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_SIGN,
-                                     accelerations_entry, rhs_entry)
+    from study.fast.dynamics import accelerations_entry, no_phases, rhs_entry
     from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
                                  FAIL_STALL, FAIL_STEP, integrate_segment)
-from study.fast.signatures import BIAS, EVALUATE
-from study.fast.steppers import METHOD_IDS, tableau
+from study.fast.signatures import BIAS, EVALUATE, PHASES
+from study.fast.steppers import tableau
+from study.fast.support import METHOD_IDS, check_supported
 from study.model.eom import EquationsOfMotion
 from study.mechanisms import Mechanism
 from study.model.coordinates import lower
@@ -45,12 +45,8 @@ from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
 from study.solver.integrate import MAX_EVENTS, initial_mode
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
-from study.solver.stabilization import SIGN_IDS, Stabilization
+from study.solver.stabilization import Stabilization
 
-SUPPORTED_INTEGRATORS = tuple(METHOD_IDS)
-SUPPORTED_ACCELERATION_SOLVERS = ("multiplier",)
-_FRICTION_IDS = {None: FRICTION_NONE, "exact": FRICTION_EXACT, "regularized": FRICTION_REGULARIZED,
-                 "sign": FRICTION_SIGN}
 _FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
              FAIL_RHS: "the acceleration problem failed (singular saddle-point system or a Painleve case of "
                        "the friction solve)",
@@ -116,39 +112,29 @@ def compiled_bias(stabilization: Stabilization):
     return cls.compiled_bias
 
 
+def compiled_phases(dyn: Dynamics):
+    """The compiled form of the run's friction treatment: its class's ``compiled_phases`` (``no_phases`` without
+    friction)."""
+    law = getattr(dyn, "law", None)
+    return no_phases if law is None else law.compiled_phases
+
+
 def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,
                  n_load_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``."""
     r, nc = eom.n_constraints, len(eom.contacts)
     s = stabilization
-    friction = None if law is None else law.name
-    cf = [getattr(law, "eps", 1.0), getattr(s, "tol", 0.0)]
+    cf = [getattr(s, "tol", 0.0)]
     cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
     cf += [c.resistance for c in eom.contacts]
-    ci = [int(s.projects), len(cf), _FRICTION_IDS[friction], SIGN_IDS.get(getattr(law, "sgn", "sign"), 0),
+    bias_offset = len(cf)
+    cf += [float(x) for x in s.compiled_parameters(r)]
+    ci = [int(s.projects), bias_offset, int(law is not None), int(law is not None and law.switched), len(cf),
           int(getattr(s, "weighting", "") == "mass"), int(getattr(s, "max_iter", 0)), n_load_modes]
     ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
-    cf += [float(x) for x in s.compiled_parameters(r)]
+    if law is not None:
+        cf += [float(x) for x in law.compiled_parameters()]
     return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
-
-
-def check_supported(integrator: str, acceleration_solver: str, progress=None) -> None:
-    """ValueError naming every option the compiled backend does not support.
-
-    The integrators of the compiled loop (``SUPPORTED_INTEGRATORS``) and, with scipy's loop on compiled
-    evaluations (``study.simulate.SCIPY_STEPS_ONLY``), Radau and LSODA; ``progress`` only on scipy's loop."""
-    from study.simulate import SCIPY_STEPS_ONLY
-
-    problems = []
-    if integrator not in (*SUPPORTED_INTEGRATORS, *SCIPY_STEPS_ONLY):
-        problems.append(f"integrator={integrator!r} (compiled: {', '.join((*SUPPORTED_INTEGRATORS, *SCIPY_STEPS_ONLY))})")
-    if acceleration_solver not in SUPPORTED_ACCELERATION_SOLVERS:
-        problems.append(f"acceleration_solver={acceleration_solver!r} (compiled: "
-                        f"{', '.join(SUPPORTED_ACCELERATION_SOLVERS)})")
-    if progress is not None:
-        problems.append("progress= (the compiled loop does not call back into Python)")
-    if problems:
-        raise ValueError("backend='compiled' does not support " + "; ".join(problems) + "; use backend='reference'")
 
 
 @dataclass
@@ -162,7 +148,8 @@ class Setup:
     y0: np.ndarray
     switching: StickSlipSwitching | None
     n_load_modes: int
-    bias: object   # the stabilization's compiled_bias
+    bias: object     # the stabilization's compiled_bias
+    phases: object   # the friction treatment's compiled_phases (no_phases without friction)
 
 
 def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
@@ -174,7 +161,8 @@ def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: 
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
                                         **method_options)
     model, ci, cf = _pack(eom, mechanism, dyn)
-    return Setup(model, dyn, ci, cf, y0, switching, model.n_load_indicators, compiled_bias(dyn.stabilization))
+    return Setup(model, dyn, ci, cf, y0, switching, model.n_load_indicators, compiled_bias(dyn.stabilization),
+                 compiled_phases(dyn))
 
 
 def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
@@ -225,13 +213,14 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
     the one raised; if the reference succeeds there, the disagreement itself is raised."""
     model, ci, cf = _pack(eom, mechanism, dyn)
     evaluate, bias = FunctionAddress(model.module.evaluate, EVALUATE), FunctionAddress(compiled_bias(dyn.stabilization), BIAS)
+    phases = FunctionAddress(compiled_phases(dyn), PHASES)
     p, lp = model.p, model.lp
     no_mode = np.zeros(0, dtype=np.int64)
 
     def rhs(t: float, y: np.ndarray, mode=None) -> np.ndarray:
         dyn.nfev += 1
         dy = np.empty(y.size)
-        status = rhs_entry(evaluate, bias, float(t), np.ascontiguousarray(y, dtype=float),
+        status = rhs_entry(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
                            no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy)
         if status != 0:
             dyn.rhs(t, y, mode)
@@ -246,9 +235,9 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     """[qdd, lambda, N, f] at one state from the compiled kernels (``repeat`` times, for timing)."""
     m, r, nc = s.dyn.eom.n_coordinates, s.dyn.eom.n_constraints, len(s.dyn.eom.contacts)
     out = np.zeros(m + r + 2 * nc)
-    status = accelerations_entry(s.model.module.evaluate, s.bias, float(t), np.ascontiguousarray(q, dtype=float),
-                                 np.ascontiguousarray(qd, dtype=float), np.asarray(mode, dtype=np.int64),
-                                 s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
+    status = accelerations_entry(s.model.module.evaluate, s.bias, s.phases, float(t),
+                                 np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
+                                 np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
     if status != 0:
         raise RuntimeError(f"compiled acceleration solve failed at t = {t}: {_FAILURES[FAIL_RHS]}")
     return out
@@ -285,8 +274,8 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     first = float(step) if step is not None else 0.0
     while True:
         outcome, t_reached, i_event = integrate_segment(
-            model.module.evaluate, s.bias, model.module.indicators, model.module.kinematics, METHOD_IDS[integrator],
-            arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
+            model.module.evaluate, s.bias, s.phases, model.module.indicators, model.module.kinematics,
+            METHOD_IDS[integrator], arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
             y_out, mode_out, counters, y_end, bounds)
         restarts += 1

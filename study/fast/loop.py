@@ -19,10 +19,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
-from study.fast.dynamics import (CF_HEADER, CI_FRICTION, CI_NLOADMODE, CI_PROJECTS, FRICTION_EXACT,
-                                 accelerations, dimensions, rhs, workspace)
+from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, accelerations, dimensions, rhs,
+                                 workspace)
 from study.fast.project import project
-from study.fast.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, V1, V2, f8, i8
+from study.fast.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
 from study.solver.integrate import BRENT_RTOL, BRENT_XTOL, SCAN_POINTS  # as the reference loop
@@ -35,12 +35,12 @@ SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)
 
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
 SEGMENT = types.Tuple((i8, f8, i8))(
-    EVALUATE_T, BIAS_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1, V1, I1, V1,
-    V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
+    EVALUATE_T, BIAS_T, PHASES_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1,
+    V1, I1, V1, V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
 
 
 @njit(cache=True)
-def event_values(evaluate, bias, indicators, t, y, mode, p, lp, ci, cf, ws, out):
+def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, ws, out):
     """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact)."""
     m, nlm = ws.q.size, ci[CI_NLOADMODE]
     for i in range(m):
@@ -48,9 +48,9 @@ def event_values(evaluate, bias, indicators, t, y, mode, p, lp, ci, cf, ws, out)
         ws.qd[i] = y[m + i]
     if nlm > 0:
         indicators(t, ws.q, ws.qd, p, lp, out[:nlm])
-    if ci[CI_FRICTION] != FRICTION_EXACT:
+    if ci[CI_SWITCHED] == 0:
         return 0
-    status = accelerations(evaluate, bias, t, mode, p, lp, ci, cf, ws)
+    status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
     nc = ws.Jt.shape[0]
     off = CF_HEADER
     for j in range(nc):
@@ -64,19 +64,22 @@ def event_values(evaluate, bias, indicators, t, y, mode, p, lp, ci, cf, ws, out)
 
 
 @njit(cache=True)
-def _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp, g):
+def _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp, g):
     dense_eval(method, D, n_rows, y_old, (s - t_old) / h, ytmp)
-    event_values(evaluate, bias, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
+    event_values(evaluate, bias, phases, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
     return g[i]
 
 
 @njit(cache=True)
-def locate(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, mode, p, lp, ci, cf, ws, ytmp, g):
+def locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, mode, p, lp, ci, cf, ws,
+           ytmp, g):
     """Zero of switching function i on [xa, xb] along the interpolant (scipy's brentq algorithm)."""
     xpre, xcur = xa, xb
     xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
-    fpre = _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, xpre, i, mode, p, lp, ci, cf, ws, ytmp, g)
-    fcur = _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws, ytmp, g)
+    fpre = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xpre, i, mode, p, lp, ci, cf, ws,
+              ytmp, g)
+    fcur = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws,
+              ytmp, g)
     if fpre == 0.0:
         return xpre
     if fcur == 0.0:
@@ -110,39 +113,40 @@ def locate(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, xa, x
             xcur += scur
         else:
             xcur += delta if sbis > 0 else -delta
-        fcur = _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws, ytmp, g)
+        fcur = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf,
+                  ws, ytmp, g)
     return xcur
 
 
 @njit(cache=True)
-def first_crossing(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, t_new, i, mode, p, lp, ci, cf, ws, ytmp,
-                   g):
+def first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_new, i, mode, p, lp, ci,
+                   cf, ws, ytmp, g):
     """The first time in [t_old, t_new] at which switching function i leaves the side mode[i], or NaN if the
     interpolant comes back to that side and stays there; the rule of the reference loop's ``_first_crossing``
     (study/solver/integrate.py), whose docstring gives the reasons. Normally the step starts on the side
     mode[i] and Brent's method brackets the step; right after a located switch the step can start on the far
     side (g is zero up to round-off there), and then SCAN_POINTS samples decide."""
     sign = mode[i]
-    if _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, t_old, i, mode, p, lp, ci, cf, ws, ytmp,
-          g) * sign >= 0:
-        return locate(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, t_old, t_new, i, mode, p, lp, ci,
-                      cf, ws, ytmp, g)
+    if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_old, i, mode, p, lp, ci, cf, ws,
+          ytmp, g) * sign >= 0:
+        return locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_old, t_new, i, mode, p,
+                      lp, ci, cf, ws, ytmp, g)
     back = -1
     for k in range(1, SCAN_POINTS + 1):
         s = t_old + (t_new - t_old) * k / SCAN_POINTS
-        if _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp,
-              g) * sign >= 0:
+        if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws,
+              ytmp, g) * sign >= 0:
             back = k
             break
     if back < 0:
         return t_old
     for k in range(back + 1, SCAN_POINTS + 1):
         s = t_old + (t_new - t_old) * k / SCAN_POINTS
-        if _g(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp,
-              g) * sign < 0:
+        if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws,
+              ytmp, g) * sign < 0:
             s_prev = t_old + (t_new - t_old) * (k - 1) / SCAN_POINTS
-            return locate(evaluate, bias, indicators, method, D, n_rows, t_old, h, y_old, s_prev, s, i, mode, p, lp, ci,
-                          cf, ws, ytmp, g)
+            return locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s_prev, s, i, mode, p,
+                          lp, ci, cf, ws, ytmp, g)
     return np.nan
 
 
@@ -170,8 +174,8 @@ def _due(t_out, k, t_hi):
 
 
 @njit(SEGMENT, cache=True)
-def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0, t_end,
-                      first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
+def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0,
+                      t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
 
     counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0), accepted steps in a row
@@ -185,7 +189,7 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
     n = y0.size
     m, r, nc, nw = dimensions(ci)
     ws = workspace(m, r, nc, nw)
-    n_events = ci[CI_NLOADMODE] + (2 * nc if ci[CI_FRICTION] == FRICTION_EXACT else 0)
+    n_events = ci[CI_NLOADMODE] + (2 * nc if ci[CI_SWITCHED] == 1 else 0)
     projecting = ci[CI_PROJECTS] == 1
     n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
     K = np.zeros((max(n_k, 4), n))
@@ -193,7 +197,7 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
     y, y_new, f, f_new, tmp = y0.copy(), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     g_new, g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
     t = t0
-    if rhs(evaluate, bias, t, y, mode, p, lp, ci, cf, ws, f) != 0:
+    if rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, f) != 0:
         return FAIL_RHS, t, -1
     if counters[4] == 1:
         counters[4] = 0
@@ -205,8 +209,8 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
     elif first_step > 0:
         h_abs = first_step
     else:
-        h_abs, status = select_initial_step(evaluate, bias, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci, cf, ws,
-                                            tmp, f_new)
+        h_abs, status = select_initial_step(evaluate, bias, phases, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci,
+                                            cf, ws, tmp, f_new)
         if status != 0:
             return FAIL_RHS, t, -1
     exponent = -1.0 / (order + 1)
@@ -217,11 +221,11 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
             h = min(h_abs, t_end - t)
             for i in range(n):
                 K[0, i] = f[i]
-            if stages(evaluate, bias, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
+            if stages(evaluate, bias, phases, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
                 return FAIL_RHS, t, -1
             combine(tab, 4, y, h, K, y_new)
             t_new = t + h
-            if rhs(evaluate, bias, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+            if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
                 return FAIL_RHS, t, -1
         else:
             min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
@@ -237,10 +241,11 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
                 h_abs = abs(h)
                 for i in range(n):
                     K[0, i] = f[i]
-                if stages(evaluate, bias, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws, tmp) != 0:
+                if stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws,
+                          tmp) != 0:
                     return FAIL_RHS, t, -1
                 combine(tab, n_stages, y, h, K, y_new)
-                if rhs(evaluate, bias, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+                if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
                     return FAIL_RHS, t, -1
                 for i in range(n):
                     K[n_stages, i] = f_new[i]
@@ -270,17 +275,17 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
         dense_ready = False
         # --- 1. switches ----------------------------------------------------------------------
         if n_events > 0:
-            if event_values(evaluate, bias, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
+            if event_values(evaluate, bias, phases, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
                 return FAIL_RHS, t, -1
             t_e, i_e = np.inf, -1
             for i in range(n_events):
                 if g_new[i] * mode[i] < 0:
                     if not dense_ready:
-                        dense_setup(evaluate, bias, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
+                        dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
                                     mode, p, lp, ci, cf, ws, tmp)
                         dense_ready = True
-                    root = first_crossing(evaluate, bias, indicators, method, D, n_rows, t_old, h, y, t_new, i, mode,
-                                          p, lp, ci, cf, ws, tmp, g_tmp)
+                    root = first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y, t_new, i,
+                                          mode, p, lp, ci, cf, ws, tmp, g_tmp)
                     if np.isnan(root):
                         counters[2] += ws.counters[0]
                         return FAIL_LOCATE, t_old, i
@@ -298,7 +303,7 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
         # --- 3. samples (before the projection, as in the reference) ---------------------------
         while _due(t_out, counters[0], t_new):
             if not dense_ready:
-                dense_setup(evaluate, bias, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
+                dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
                             mode, p, lp, ci, cf, ws, tmp)
                 dense_ready = True
             tk = t_out[counters[0]]
@@ -312,7 +317,7 @@ def integrate_segment(evaluate, bias, indicators, kinematics, method, tab, n_sta
                 return FAIL_PROJECTION, t_new, -1
             if changed:
                 counters[3] += 1
-                if rhs(evaluate, bias, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+                if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
                     return FAIL_RHS, t, -1
         t = t_new
         for i in range(n):

@@ -11,6 +11,7 @@ i8 = types.int64
 V1 = types.Array(f8, 1, "C")
 V2 = types.Array(f8, 2, "C")
 I1 = types.Array(i8, 1, "C")
+B1 = types.Array(types.boolean, 1, "C")
 
 #: evaluate(t, q, qd, mode, p, lp, M, Q, phi, J, gamma, Jt, bt, powers)
 EVALUATE = types.void(f8, V1, V1, I1, V1, V1, V2, V1, V1, V2, V1, V2, V1, V1)
@@ -21,8 +22,14 @@ KINEMATICS = types.void(V1, V1, V1, V2, V2)
 
 #: bias(phi, phidot, cf, offset, out): a stabilization's b(Phi, Phidot), its parameters at cf[offset:]
 BIAS = types.void(V1, V1, V1, i8, V1)
+#: phases(mode, n_load_modes, v_t, cf, offset, stick, s): a friction treatment's stick flags and slip factors of
+#: the contacts, its parameters at cf[offset:]
+PHASES = types.void(I1, i8, V1, V1, i8, B1, V1)
+#: sgn(s, width): an approximation of sgn (study.fast.signs)
+SIGN = f8(f8, f8)
 
 EVALUATE_T = types.FunctionType(EVALUATE)
 BIAS_T = types.FunctionType(BIAS)
+PHASES_T = types.FunctionType(PHASES)
 INDICATORS_T = types.FunctionType(INDICATORS)
 KINEMATICS_T = types.FunctionType(KINEMATICS)

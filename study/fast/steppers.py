@@ -20,9 +20,9 @@ from scipy.integrate import DOP853, RK23, RK45
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from study.fast.dynamics import rhs
+from study.fast.support import METHOD_IDS
 
-RK23_ID, RK45_ID, DOP853_ID, RK4_ID = 0, 1, 2, 3
-METHOD_IDS = {"RK23": RK23_ID, "RK45": RK45_ID, "DOP853": DOP853_ID, "RK4": RK4_ID}
+RK23_ID, RK45_ID, DOP853_ID, RK4_ID = (METHOD_IDS[k] for k in ("RK23", "RK45", "DOP853", "RK4"))
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # scipy.integrate._ivp.rk
 
 
@@ -55,7 +55,8 @@ def rms(v):
 
 
 @njit(cache=True)
-def select_initial_step(evaluate, bias, t0, y0, f0, t_bound, order, rtol, atol, mode, p, lp, ci, cf, ws, tmp, f1):
+def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol, atol, mode, p, lp, ci, cf, ws, tmp,
+                        f1):
     """scipy.integrate._ivp.common.select_initial_step (Hairer, Norsett & Wanner II.4)."""
     n = y0.size
     interval = abs(t_bound - t0)
@@ -71,7 +72,7 @@ def select_initial_step(evaluate, bias, t0, y0, f0, t_bound, order, rtol, atol, 
     h0 = min(h0, interval)
     for i in range(n):
         tmp[i] = y0[i] + h0 * f0[i]
-    status = rhs(evaluate, bias, t0 + h0, tmp, mode, p, lp, ci, cf, ws, f1)
+    status = rhs(evaluate, bias, phases, t0 + h0, tmp, mode, p, lp, ci, cf, ws, f1)
     d2 = 0.0
     for i in range(n):
         sc = atol + abs(y0[i]) * rtol
@@ -85,7 +86,7 @@ def select_initial_step(evaluate, bias, t0, y0, f0, t_bound, order, rtol, atol, 
 
 
 @njit(cache=True)
-def stages(evaluate, bias, tab, n_stages, t, y, h, K, first, last, mode, p, lp, ci, cf, ws, tmp):
+def stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, first, last, mode, p, lp, ci, cf, ws, tmp):
     """K[s] = f(t + C[s] h, y + h sum_j A[s, j] K[j]) for s in first..last-1; returns a status."""
     A, C = tab[0], tab[2]
     n = y.size
@@ -95,7 +96,7 @@ def stages(evaluate, bias, tab, n_stages, t, y, h, K, first, last, mode, p, lp, 
             for j in range(s):
                 acc += A[s, j] * K[j, i]
             tmp[i] = y[i] + h * acc
-        status = rhs(evaluate, bias, t + C[s] * h, tmp, mode, p, lp, ci, cf, ws, K[s])
+        status = rhs(evaluate, bias, phases, t + C[s] * h, tmp, mode, p, lp, ci, cf, ws, K[s])
         if status != 0:
             return status
     return 0
@@ -142,7 +143,7 @@ def combine(tab, n_stages, y, h, K, y_new):
 
 
 @njit(cache=True)
-def dense_setup(evaluate, bias, method, tab, n_stages, t_old, h, y_old, y_new, f_old, f_new, K, D,
+def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, y_new, f_old, f_new, K, D,
                 mode, p, lp, ci, cf, ws, tmp):
     """Coefficients D of the step's interpolant (scipy's RkDenseOutput / Dop853DenseOutput / Hermite)."""
     n = y_old.size
@@ -151,7 +152,7 @@ def dense_setup(evaluate, bias, method, tab, n_stages, t_old, h, y_old, y_new, f
             D[0, i], D[1, i], D[2, i], D[3, i] = y_old[i], y_new[i], h * f_old[i], h * f_new[i]
         return 0
     if method == DOP853_ID:
-        status = stages(evaluate, bias, tab, n_stages, t_old, y_old, h, K, n_stages + 1, K.shape[0],
+        status = stages(evaluate, bias, phases, tab, n_stages, t_old, y_old, h, K, n_stages + 1, K.shape[0],
                         mode, p, lp, ci, cf, ws, tmp)
         Dm = tab[6]
         for i in range(n):

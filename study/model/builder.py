@@ -62,7 +62,14 @@ class TorqueLoad:
 
 @dataclass(frozen=True)
 class Contact:
-    """A sliding contact: the point's normal gap n.r - offset = 0 is a constraint row."""
+    """A sliding contact: the point's normal gap n.r - offset = 0 is a constraint row.
+
+    ``guide`` None: the guide is fixed in ground (normal, tangent and offset constants) and the sliding velocity is
+    v_t = t . v_point. Else the guide is that body: normal, tangent and offset are expressions of q (they turn and
+    move with it) and v_t = t . (v_point - v_G*), v_G* the velocity of the guide's material point that coincides
+    with the contact point, so the generalized friction force J_t^T f (J_t = dv_t/dqd) is the force f t on the
+    point's body and -f t on the guide at the same place: equal and opposite, its power f v_t.
+    """
 
     name: str
     point: Point
@@ -71,6 +78,7 @@ class Contact:
     mu_static: Expr
     mu_kinetic: Expr
     resistance: Expr
+    guide: Body | None = None
 
 
 class MechanismBuilder:
@@ -151,15 +159,19 @@ class MechanismBuilder:
         return mode
 
     def sliding_contact(self, name: str, point: Point, normal, offset, tangent,
-                        mu_static: Any, mu_kinetic: Any, resistance: Any = 0) -> Contact:
+                        mu_static: Any, mu_kinetic: Any, resistance: Any = 0, guide: Body | None = None) -> Contact:
         """A sliding joint: adds the constraint n.r_point - offset = 0 (n a unit vector).
 
-        Its multiplier is then the normal force (N = -lambda along n), so Coulomb friction can use it.
+        Its multiplier is then the normal force (N = -lambda along n), so Coulomb friction can use it. ``guide``: the
+        body the point slides on (None: ground); then n, t and offset are expressions of q (the guide's rotated
+        normal and axis, n . r of its guide point) and the sliding velocity is relative to the guide (see
+        :class:`Contact`).
         """
         n = tuple(sp.sympify(v) for v in normal)
         t = tuple(sp.sympify(v) for v in tangent)
-        self.constraint(name, n[0] * point.x + n[1] * point.y - sp.sympify(offset))
-        c = Contact(name, point, n, t, *(sp.sympify(v) for v in (mu_static, mu_kinetic, resistance)))
+        row = n[0] * point.x + n[1] * point.y - sp.sympify(offset)
+        self.constraint(name, row if guide is None else sp.expand(row))
+        c = Contact(name, point, n, t, *(sp.sympify(v) for v in (mu_static, mu_kinetic, resistance)), guide=guide)
         self.contacts.append(c)
         return c
 
@@ -199,6 +211,8 @@ class MechanismBuilder:
             dot = sp.simplify(c.normal[0] * c.tangent[0] + c.normal[1] * c.tangent[1])
             if norm != 1 or dot != 0:
                 problems.append(f"contact {c.name!r}: normal must be a unit vector orthogonal to the tangent")
+            if c.guide is not None and c.guide not in self.bodies:
+                problems.append(f"contact {c.name!r}: its guide {c.guide.name!r} is not a body of the mechanism")
         if not self.bodies:
             problems.append("no bodies")
         if problems:

@@ -47,6 +47,7 @@ def description_key(b: MechanismBuilder) -> str:
     parts += [sp.srepr((x.name, x.point.name, x.components)) for x in b.point_loads]
     parts += [sp.srepr((x.name, x.body.name, x.torque)) for x in b.torque_loads]
     parts += [sp.srepr(x) for x in b.switches]
+    parts += [sp.srepr((c.name, c.point.name, c.normal, c.tangent, c.guide.name)) for c in b.contacts if c.guide]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
@@ -105,6 +106,12 @@ def generate_source(b: MechanismBuilder, eqs: SymbolicEquations) -> str:
         names.append(f"load__{name}")
     funcs.append(_function("indicators", "t, q, qd", uq + uqd, eqs.indicators, (len(modes),)))
     names.append("indicators")
+    for c in b.contacts:
+        if c.guide is not None:   # a moving guide's J_t and Jdot_t qd (a fixed guide's come from its point's)
+            funcs.append(_function(f"contact_jac__{c.name}", "q", uq, eqs.contact_jacobians[c.name], (m,)))
+            funcs.append(_function(f"contact_bias__{c.name}", "q, qd", uq + uqd,
+                                   sp.Matrix([eqs.contact_bias[c.name]]), ()))
+            names += [f"contact_jac__{c.name}", f"contact_bias__{c.name}"]
     for body in b.bodies:
         funcs.append(_function(f"angle__{body.name}", "q", uq, sp.Matrix([body.angle]), ()))
         funcs.append(_function(f"angle_jac__{body.name}", "q", uq, eqs.angle_jacobians[body.name], (m,)))
@@ -174,13 +181,19 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
 
     contacts = []
     for c in b.contacts:
-        tangent = np.array([float(sp.sympify(v).subs(subs)) for v in c.tangent])
-        jac, bias = f[f"jac__{c.point.name}"], f[f"bias__{c.point.name}"]
+        if c.guide is None:   # fixed guide: the constant tangent times the point's Jacobian and bias
+            tangent = np.array([float(sp.sympify(v).subs(subs)) for v in c.tangent])
+            jac, bias = f[f"jac__{c.point.name}"], f[f"bias__{c.point.name}"]
+            tangent_jacobian = lambda q, jac=jac, tangent=tangent: tangent @ jac(q)  # noqa: E731
+            tangent_bias = lambda q, qd, bias=bias, tangent=tangent: float(tangent @ bias(q, qd))  # noqa: E731
+        else:                 # moving guide: the generated J_t and Jdot_t qd of the velocity relative to it
+            tangent_jacobian = f[f"contact_jac__{c.name}"]
+            tangent_bias = lambda q, qd, bias=f[f"contact_bias__{c.name}"]: float(bias(q, qd))  # noqa: E731
         contacts.append(SlidingContact(
             name=c.name,
             constraint_index=[name for name, _ in b.constraints].index(c.name),
-            tangent_jacobian=lambda q, jac=jac, tangent=tangent: tangent @ jac(q),
-            tangent_bias=lambda q, qd, bias=bias, tangent=tangent: float(tangent @ bias(q, qd)),
+            tangent_jacobian=tangent_jacobian,
+            tangent_bias=tangent_bias,
             mu_static=float(c.mu_static.subs(subs)),
             mu_kinetic=float(c.mu_kinetic.subs(subs)),
             resistance=float(c.resistance.subs(subs)),

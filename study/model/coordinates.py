@@ -200,11 +200,20 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
         counts.append((jnt.name, len(rows)))
         if isinstance(jnt, Prismatic) and jnt.friction is not None:
             (gap_name, _), rest = rows[0], rows[1:]   # the contact writes the same gap row itself
-            normal = tuple(jnt.normal)          # guide fixed in ground: global = guide frame
-            tangent = tuple(jnt.axis)
-            offset = sp.expand(sum(n * x for n, x in zip(normal, d.ground_points[jnt.guide[1]])))
-            b.sliding_contact(gap_name, points[jnt.slider], normal, offset, tangent, jnt.friction.mu_static,
-                              jnt.friction.mu_kinetic, jnt.friction.resistance)
+            fr = jnt.friction
+            if jnt.guide[0] == GROUND:          # guide fixed in ground: global = guide frame
+                normal = tuple(jnt.normal)
+                tangent = tuple(jnt.axis)
+                offset = sp.expand(sum(n * x for n, x in zip(normal, d.ground_points[jnt.guide[1]])))
+                b.sliding_contact(gap_name, points[jnt.slider], normal, offset, tangent, fr.mu_static,
+                                  fr.mu_kinetic, fr.resistance)
+            else:                               # moving guide: its axis and normal turn with it
+                turn = rotation(placed[jnt.guide[0]][1])
+                normal = tuple(turn * sp.Matrix(jnt.normal))
+                tangent = tuple(turn * sp.Matrix(jnt.axis))
+                offset = sum(n * x for n, x in zip(normal, _world(d, placed, *jnt.guide)))
+                b.sliding_contact(gap_name, points[jnt.slider], normal, offset, tangent, fr.mu_static,
+                                  fr.mu_kinetic, fr.resistance, guide=bodies[jnt.guide[0]])
             for row in rest:
                 b.constraint(*row)
         else:

@@ -10,6 +10,10 @@ centre of mass r_i(q) and angle theta_i(q):
 
 so that M qdd + C qd + dV/dq + Phi_q^T lambda = Q_applied, with Q_applied the sum of the loads'
 generalized forces J_p^T f (a force f at point p) and j_i^T tau (a torque on body i).
+
+A sliding contact's tangential velocity is v_t = J_t qd, its rate J_t qdd + b_t with b_t = Jdot_t qd:
+J_t = t . J_p on a guide fixed in ground; on a moving guide G, J_t = t(q) . (J_p - J_G*) with
+J_G* qd = v_G + omega_G k x (r_p - r_G) the velocity of G's material point at the contact point.
 """
 
 from __future__ import annotations
@@ -38,6 +42,8 @@ class SymbolicEquations:
     angle_jacobians: dict[str, sp.Matrix]       # (1, m)  per body
     loads: dict[str, sp.Matrix]                 # (m, 1)  generalized force of every applied load
     indicators: sp.Matrix                       # (k, 1)  switching functions of the loads
+    contact_jacobians: dict[str, sp.Matrix] = None   # (1, m)  J_t of every sliding contact
+    contact_bias: dict[str, sp.Expr] = None          # Jdot_t qd of every sliding contact
 
 
 def _bias(jac: sp.Matrix, q: sp.Matrix, qd: sp.Matrix) -> sp.Matrix:
@@ -78,6 +84,21 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
     for load in b.torque_loads:
         loads[load.name] = angle_jacobians[load.body.name].T * load.torque
     indicators = sp.Matrix([e for _, e, _ in b.switches]) if b.switches else sp.zeros(0, 1)
+    contact_jacobians, contact_bias = {}, {}
+    for c in b.contacts:
+        jac, pb = jacobians[c.point.name], bias[c.point.name]
+        if c.guide is None:   # fixed guide: t . J_p and t . Jdot_p qd with the constant tangent
+            contact_jacobians[c.name] = sp.Matrix([[c.tangent[0] * jac[0, j] + c.tangent[1] * jac[1, j]
+                                                    for j in range(m)]])
+            contact_bias[c.name] = c.tangent[0] * pb[0] + c.tangent[1] * pb[1]
+            continue
+        g = c.guide
+        arm = sp.Matrix([c.point.x - g.x, c.point.y - g.y])          # guide's centre of mass -> contact point
+        ja = angle_jacobians[g.name]
+        coincident = sp.Matrix([g.x, g.y]).jacobian(q) + sp.Matrix([-arm[1], arm[0]]) * ja
+        jt = (sp.Matrix([list(c.tangent)]) * (jac - coincident)).applyfunc(sp.expand)
+        contact_jacobians[c.name] = jt
+        contact_bias[c.name] = sp.expand(_bias(jt, q, qd)[0])
     return SymbolicEquations(
         mass=mass,
         velocity_terms=vel,
@@ -92,4 +113,6 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         angle_jacobians=angle_jacobians,
         loads=loads,
         indicators=indicators,
+        contact_jacobians=contact_jacobians,
+        contact_bias=contact_bias,
     )

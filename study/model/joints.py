@@ -19,7 +19,10 @@ Conventions
   the axis) orients the gap row ``<name> = n . (r_S(s) - r_G(g))``, so its multiplier lambda is a
   force: the guide pushes the slider with ``-lambda n``. The relative rotation is locked
   (row ``<name>_angle = theta_S - theta_G - angle_offset``). Optional Coulomb contact data
-  (:class:`Friction`) makes it a sliding contact with friction (guides fixed in ground only).
+  (:class:`Friction`) makes it a sliding contact with friction (a cut joint: no ``travel``). The guide may
+  be ground or a moving body: the normal force is the gap row's multiplier (along the guide's normal,
+  turning with it), the sliding velocity is the slider point's velocity relative to the guide's
+  coincident point along the guide's axis, and the friction acts on both bodies, equal and opposite.
 * Loads are data: sympy expressions in named inputs (:meth:`Description.position`,
   :meth:`~Description.velocity`, :meth:`~Description.angle`, :meth:`~Description.rate`,
   :attr:`~Description.t`) and parameters (``d.p.<name>``). A switching law declares its switching
@@ -367,8 +370,9 @@ class Description:
                 if sp.simplify(ax[0] ** 2 + ax[1] ** 2 - 1) != 0 or sp.simplify(n[0] ** 2 + n[1] ** 2 - 1) != 0 \
                         or sp.simplify(ax[0] * n[0] + ax[1] * n[1]) != 0:
                     problems.append(f"joint {j.name!r}: axis and normal must be orthogonal unit vectors")
-                if j.friction is not None and j.guide[0] != GROUND:
-                    problems.append(f"joint {j.name!r}: friction is supported on guides fixed in ground only")
+                if j.friction is not None and j.slider[0] == GROUND:
+                    problems.append(f"joint {j.name!r}: friction needs a slider body (the slider is ground; make "
+                                    f"ground the guide)")
                 if j.travel is not None:
                     stray = j.travel.free_symbols - params - set(self.q)
                     if stray:

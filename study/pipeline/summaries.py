@@ -97,9 +97,9 @@ def backend_cpu(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
     The twin runs a shorter horizon (study.pipeline.cases.sample_horizon); ``reference_cpu_scaled_s`` is its
     CPU scaled to the case's horizon (CPU is linear in simulated time, bench_linearity_deviation), and
     ``compiled_over_reference`` compares CPU per simulated second. ``steps``: who takes the compiled case's
-    steps, the compiled loop ('compiled loop') or scipy on compiled evaluations ('scipy', study.simulate.SCIPY_STEPS_ONLY).
+    steps, the compiled loop ('compiled loop') or scipy on compiled evaluations ('scipy', study.fast.support.SCIPY_STEPS_ONLY).
     """
-    from study.simulate import SCIPY_STEPS_ONLY
+    from study.fast.support import SCIPY_STEPS_ONLY
 
     rows = []
     for cl in case_lists:

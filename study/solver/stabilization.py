@@ -9,7 +9,8 @@ constraint dynamics (Phi_ddot = Phi_q qdd - gamma):
 - ``projection``:   b = 0, and after every accepted step q is projected onto Phi = 0 and qd onto
                     Phi_q qd = 0 (minimum-norm or mass-weighted Gauss-Newton).
 
-The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17).
+The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17; ``study.fast.signs``, one
+numba function each for both backends).
 
 Each method is one class for both backends: ``bias`` is its reference (NumPy) form, and
 ``compiled_bias`` its compiled counterpart, a numba function of signature
@@ -22,54 +23,19 @@ does not define its own ``compiled_bias`` is refused by name on the compiled pat
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from numba import njit
 
 from study import arguments
 from study.fast.signatures import BIAS
-from study.fast.signs import sign_function
+from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 from study.reference_data import tolerance
 
 from study.model.eom import EquationsOfMotion
 
 Array = np.ndarray
-
-
-# --- sgn approximations (001, after eq. 17) ---------------------------------------------------
-def _sign(s: Array, width: float) -> Array:
-    return np.sign(s)
-
-
-def _sat(s: Array, width: float) -> Array:
-    return np.clip(s / width, -1.0, 1.0)
-
-
-def _tanh(s: Array, width: float) -> Array:
-    return np.tanh(s / width)
-
-
-def _arctan(s: Array, width: float) -> Array:
-    return (2.0 / math.pi) * np.arctan(s / width)
-
-
-def _sqrt(s: Array, width: float) -> Array:
-    return s / np.sqrt(s * s + width * width)
-
-
-# name -> f(s, width). The width is eps for sat and sqrt and 1/c for tanh(c s) and arctan(c s).
-SIGN_FUNCTIONS: dict[str, Callable[[Array, float], Array]] = {
-    "sign": _sign,
-    "sat": _sat,
-    "tanh": _tanh,
-    "arctan": _arctan,
-    "sqrt": _sqrt,
-}
-#: name -> the id of the same approximation in the compiled code (study.fast.signs.sign_function, same order)
-SIGN_IDS = {name: i for i, name in enumerate(SIGN_FUNCTIONS)}
 
 
 def _positive(owner: str, **values: float) -> None:
@@ -119,7 +85,7 @@ def _baumgarte_bias(phi, phidot, cf, off, out):
 
 @njit(BIAS, cache=True)
 def _sliding_mode_bias(phi, phidot, cf, off, out):
-    r = phi.size   # cf[off:] = sgn id, width, Lambda (r), K (r), k (r)
+    r = phi.size   # cf[off:] = SIGN_IDS[sgn], width, Lambda (r), K (r), k (r)
     kind, width = int(cf[off]), cf[off + 1]
     for i in range(r):
         lam, K, k = cf[off + 2 + i], cf[off + 2 + r + i], cf[off + 2 + 2 * r + i]
@@ -199,7 +165,7 @@ class SlidingMode(Stabilization):
     def bias(self, phi, phidot):
         lam, K, k = (np.asarray(v, dtype=float) for v in (self.Lambda, self.K, self.k))
         s = phidot + lam * phi
-        return -lam * phidot - K * s - k * SIGN_FUNCTIONS[self.sgn](s, self.width)
+        return -lam * phidot - K * s - k * apply(self.sgn, s, self.width)
 
     compiled_bias = staticmethod(_sliding_mode_bias)
 

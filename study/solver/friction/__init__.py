@@ -2,8 +2,8 @@
 
 One module per concept:
 
-* :mod:`.laws`: the treatments (``exact``, ``regularized``, ``sign``) by name, the readings of a
-  contact's constant resistance, and the default width of the regularized sign;
+* :mod:`.laws`: the treatments (``exact``, ``regularized``, ``sign``) by name, each one class for both
+  backends, the readings of a contact's constant resistance, and the default width of the regularized sign;
 * :mod:`.contact`: the coupled contact problem at one state (:class:`FrictionDynamics`), with its
   normal-force sign hypotheses and Painleve's paradox;
 * :mod:`.switching`: event-located stick/slip switching of the exact treatment (:class:`StickSlipSwitching`).

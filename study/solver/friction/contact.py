@@ -132,14 +132,13 @@ class FrictionDynamics(Dynamics):
     def phases(self, mode, v_t: Array) -> tuple[Array, Array]:
         """(stick flags, slip factors s) of the contacts in ``mode`` at tangential velocities ``v_t``."""
         nc = self.n_contacts
+        entries = None
         if self.law.switched:
             if mode is None or len(mode) != self.n_load_modes + 2 * nc:
                 raise ValueError(f"the exact friction treatment needs a mode with {self.n_load_modes} load entries and "
                                  f"2 per contact ({nc} contacts); got {mode!r}")
             entries = np.asarray(mode[self.n_load_modes:], dtype=float).reshape(nc, 2)
-            stick = entries[:, 0] > 0
-            return stick, np.where(stick, 0.0, entries[:, 1])
-        return np.zeros(nc, dtype=bool), np.asarray(self.law.factor(v_t), dtype=float).reshape(nc)
+        return self.law.phases(entries, v_t)
 
     def _setup(self, t, q, qd, mode, stick, s):
         eom = self.eom

@@ -9,6 +9,12 @@ Treatments, by name (``FRICTION_TREATMENTS``):
   arctan, sqrt) of width eps; no stick, the contact creeps under sub-limit loads.
 - ``sign``: 000's plain sgn(v_t) at every evaluation (meant for fixed-step RK4; it chatters at v_t = 0).
 
+Each treatment is one class for both backends: ``phases`` gives the contacts' stick flags and slip
+factors s (f = -s (R + mu_k |N|) in slip) on the reference path, and ``compiled_phases`` is the same law
+for the compiled path, a numba function of signature ``study.fast.signatures.PHASES`` that reads the
+numbers ``compiled_parameters()`` at its offset in the compiled options (``study.fast.frontend.pack_options``).
+The slip factors of 'regularized' and 'sign' are ``study.fast.signs`` functions, the same on both paths.
+
 Paper 000 says only that R (its F) "opposes the slider's motion"; whether it also resists the onset of
 motion, i.e. counts as static holding capacity, is an open assumption. ``RESISTANCE_READINGS`` names
 both readings; the exact treatment takes one (``resistance_reading``), and the parameter file of a
@@ -23,10 +29,13 @@ Both readings give the same sliding motion; they differ only in when a contact s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
-from study.solver.stabilization import SIGN_FUNCTIONS
+from study.fast.signatures import PHASES
+from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 
 Array = np.ndarray
 
@@ -38,6 +47,47 @@ RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 #: sliding speeds of the study's cases (slider-crank ~0.2-0.3 m/s, ram up to ~6 m/s), so the
 #: regularized force equals the Coulomb force (tanh >= 0.99) except within ~2.6 mm/s of a stop.
 DEFAULT_EPS = 1e-3
+
+
+@njit(PHASES, cache=True)
+def _mode_phases(mode, nlm, vt, cf, off, stick, s):
+    """ExactCoulomb.phases: mode = the loads' nlm entries, then per contact (+1 stick / -1 slip, direction)."""
+    for j in range(vt.size):
+        stick[j] = mode[nlm + 2 * j] > 0
+        s[j] = 0.0 if stick[j] else float(mode[nlm + 2 * j + 1])
+
+
+@njit(PHASES, cache=True)
+def _slip_phases(mode, nlm, vt, cf, off, stick, s):
+    """SlipFactor.phases, with cf[off:] = SIGN_IDS[sgn], eps (SlipFactor.compiled_parameters)."""
+    kind, eps = int(cf[off]), cf[off + 1]
+    for j in range(vt.size):
+        stick[j] = False
+        s[j] = sign_function(kind, vt[j], eps)
+
+
+class SlipFactor:
+    """A treatment without a true stick: the slip factor is ``SIGN_FUNCTIONS[sgn](v_t, eps)`` at every
+    evaluation, and ``stick_<contact>`` is reported as 1 inside the band |v_t| <= eps (apparent stick)."""
+
+    sgn: str
+    eps: float
+
+    def factor(self, v: Array) -> Array:
+        return apply(self.sgn, v, self.eps)
+
+    def phases(self, entries: Array | None, v: Array) -> tuple[Array, Array]:
+        """No contact sticks; the slip factors at the tangential velocities v (no mode entries: ``entries`` None)."""
+        v = np.asarray(v, dtype=float)
+        return np.zeros(v.size, dtype=bool), self.factor(v).reshape(v.size)
+
+    compiled_phases = staticmethod(_slip_phases)
+
+    def compiled_parameters(self) -> list[float]:
+        return [float(SIGN_IDS[self.sgn]), self.eps]
+
+    def apparent_stick(self, v: Array) -> Array:
+        return np.abs(v) <= self.eps
 
 
 @dataclass(frozen=True)
@@ -61,8 +111,16 @@ class ExactCoulomb:
     def static_resistance_fraction(self) -> float:
         return RESISTANCE_READINGS[self.resistance_reading]
 
-    def factor(self, v: Array) -> Array:  # pragma: no cover - the direction comes from the mode
-        raise TypeError("the exact treatment takes its sliding directions from the mode")
+    def phases(self, entries: Array, v: Array) -> tuple[Array, Array]:
+        """Stick where the mode says so (``entries``: (nc, 2) mode entries, +1 stick / -1 slip and the frozen
+        direction), else slip in the frozen direction."""
+        stick = entries[:, 0] > 0
+        return stick, np.where(stick, 0.0, entries[:, 1])
+
+    compiled_phases = staticmethod(_mode_phases)
+
+    def compiled_parameters(self) -> list[float]:
+        return []
 
     def apparent_stick(self, v: Array) -> Array:  # pragma: no cover
         raise TypeError("the exact treatment has a true stick state")
@@ -72,11 +130,10 @@ class ExactCoulomb:
 
 
 @dataclass(frozen=True)
-class RegularizedCoulomb:
+class RegularizedCoulomb(SlipFactor):
     """sgn(v_t) replaced by ``SIGN_FUNCTIONS[sgn](v_t, eps)`` (tanh(v/eps), sat, arctan, sqrt).
 
-    ``eps`` [m/s] is the width of the transition (1/c for tanh and arctan). ``stick_<contact>`` is
-    reported as 1 inside the band |v_t| <= eps (apparent stick: the law has no true stick).
+    ``eps`` [m/s] is the width of the transition (1/c for tanh and arctan).
     """
 
     eps: float = DEFAULT_EPS
@@ -92,18 +149,12 @@ class RegularizedCoulomb:
             hint = " (the plain sgn is friction='sign')" if self.sgn == "sign" else ""
             raise ValueError(f"friction_sgn = {self.sgn!r}{hint}; valid choices: {', '.join(smooth)}")
 
-    def factor(self, v: Array) -> Array:
-        return SIGN_FUNCTIONS[self.sgn](np.asarray(v, dtype=float), self.eps)
-
-    def apparent_stick(self, v: Array) -> Array:
-        return np.abs(v) <= self.eps
-
     def settings(self) -> dict:
         return {"friction": self.name, "friction_eps": self.eps, "friction_sgn": self.sgn}
 
 
 @dataclass(frozen=True)
-class PlainSign:
+class PlainSign(SlipFactor):
     """000's law as printed: f = -(R + mu |N|) sgn(v_t), sgn(0) = 0, evaluated at every stage.
 
     ``eps`` only defines the reported apparent stick, |v_t| <= eps.
@@ -112,16 +163,11 @@ class PlainSign:
     eps: float = DEFAULT_EPS
     name: str = "sign"
     switched: bool = False
+    sgn: ClassVar[str] = "sign"
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.eps) and self.eps > 0):
             raise ValueError(f"friction_eps = {self.eps!r} must be finite and > 0")
-
-    def factor(self, v: Array) -> Array:
-        return np.sign(np.asarray(v, dtype=float))
-
-    def apparent_stick(self, v: Array) -> Array:
-        return np.abs(v) <= self.eps
 
     def settings(self) -> dict:
         return {"friction": self.name, "friction_eps": self.eps}
