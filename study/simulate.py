@@ -12,7 +12,7 @@ from threadpoolctl import threadpool_limits
 from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
-from study.fast.support import SCIPY_STEPS_ONLY
+from study.fast.support import SCIPY_STEPS_ONLY, check_supported
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
@@ -199,8 +199,6 @@ def simulate(
     acceleration_solver = ("augmented_lagrangian" if index3 else "multiplier") if acceleration_solver is None \
         else acceleration_solver
     if backend == "compiled":   # before anything compiles: importing the compiled path compiles its kernels
-        from study.fast.support import check_supported
-
         check_supported(integrator, acceleration_solver, progress)
     min_rtol = tolerance("integrator_min_rtol")
     scipy_steps = backend == "reference" or integrator in SCIPY_STEPS_ONLY

@@ -1,4 +1,4 @@
-"""A bad description gets one clear error naming the body, joint, load or point at fault and why (issue 24, item 6).
+"""A bad description gets one clear error naming the body, joint, load or point at fault and why.
 
 Each test builds a one-degree-of-freedom pendulum (a bar pinned to ground), breaks it in one way and checks the
 error's type and that its message names the culprit and the reason, in both coordinate sets where the fault is

@@ -154,3 +154,20 @@ def test_generated_code_is_cached(tmp_path, monkeypatch):
     comp.compile_description(builder(ps))
     assert len(calls) == 1
     assert len(list((tmp_path / "codegen").glob("quick_return_*.py"))) == 1
+
+
+@pytest.mark.parametrize("change", ["axis", "mu"])
+def test_a_contacts_geometry_and_law_reach_the_generated_codes_key(change):
+    """The generated modules are cached by description_key: a fixed guide's axis (the sign of J_t) and its friction
+    coefficients must change it, or a cached module with the old contact would be reused."""
+    from study.mechanisms import builder
+    from study.model.compile import description_key
+    from study.params import load_parameters
+
+    ps = load_parameters("slider_crank", "sustained_sliding")
+    b = builder(ps)
+    before = description_key(b)
+    c = b.contacts[0]
+    flipped = {"axis": {"tangent": tuple(-x for x in c.tangent)}, "mu": {"mu_kinetic": 2 * c.mu_kinetic}}[change]
+    b.contacts[0] = type(c)(**{**vars(c), **flipped})
+    assert description_key(b) != before

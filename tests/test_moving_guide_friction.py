@@ -1,4 +1,4 @@
-"""Coulomb friction on a moving guide: a slider on a turning arm (issue 26, item 2).
+"""Coulomb friction on a moving guide: a slider on a turning arm.
 
 The mechanism: an arm turns about a ground pivot O at its centre of mass (angle ph, centroidal inertia Ja, a
 constant drive torque tau); its guide line runs parallel to the arm's axis at the offset e (the line through the arm

@@ -2,7 +2,7 @@
 package that imports ``exudyn``).
 
 ``run(ps, t_end, h, solver='index3', output_step=None, friction='regularized', eps=..., configuration='python',
-ignore_singular=False, linear_solver='dense') ->
+ignore_singular=False, linear_solver='dense', newton_tolerance=NEWTON_TOLERANCE) ->
 study.results.SimulationResult`` builds the Exudyn model of ``ps``'s description
 (:mod:`study.exudyn_models.translate`); there is no per-mechanism code. The in-house equations of
 motion are used for nothing but the consistent initial state and for evaluating the in-house Phi on

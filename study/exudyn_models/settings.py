@@ -18,7 +18,7 @@ Verified Exudyn 1.13.6 behaviour the Exudyn models rely on (see the docstrings w
   from an exact solve by a few 1e-7 of that term (zero at zero velocity).
 * ``linearSolver.ignoreSingularJacobian`` has no effect with the sparse solver (EigenSparse): N-four-bar
   seed, index 3, 2 s, the sparse run with the flag is bit-identical to the one without (Exudyn documents
-  the flag for dense matrices only), hence LINEAR_SOLVERS refuses the combination.
+  the flag for dense matrices only), hence ``check_arguments`` refuses the combination.
 * Explicit solvers refuse joint constraints with ``exudyn.ModelError`` ("SolverExplicit: explicit
   integrator detected object <n> which contains constraints that cannot be solved; aborting solver").
 """
@@ -209,6 +209,8 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
     linear_solver : one of LINEAR_SOLVERS
         ``linearSolver.solverType`` (LINEAR_SOLVER_TYPES): 'dense' (EXUdense, Exudyn's default) or 'sparse'
         (EigenSparse, for larger systems).
+    newton_tolerance : float
+        Newton's relative and absolute tolerance (default NEWTON_TOLERANCE).
     """
     s = exu.SimulationSettings()
     ti = s.timeIntegration

@@ -10,6 +10,7 @@ is otherwise paid once per machine. An explicit ``NUMBA_CACHE_DIR`` in the envir
 from __future__ import annotations
 
 import os
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -33,31 +34,38 @@ def numba_dir() -> Path:
 
 @contextmanager
 def compile_lock():
-    """Hold an exclusive lock on numba's cache folder while kernels with declared signatures compile or load (they
-    do so when their module is imported). Two processes that start together (the test workers, the pipeline's)
-    would otherwise both compile the same kernels; the second now waits and loads what the first saved. Where
-    ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result."""
-    global _held
+    """Hold an exclusive lock on numba's cache folder while the compiled path's large kernels with declared
+    signatures compile or load: the frontend's entry kernels (on its import) and a generated module's (on its load).
+    Two processes that start together (the test workers, the pipeline's) would otherwise both compile the same
+    kernels; the second waits and loads what the first saved. The small kernels with declared signatures that
+    ``study.solver`` imports (the sgn functions, the stabilization biases, the friction phases) compile outside it.
+    Where ``fcntl`` is missing (not POSIX) or the cache folder is not writable there is no lock: each process
+    compiles, with the same result."""
     try:
         import fcntl
     except ImportError:
         fcntl = None
-    if fcntl is None or _held:   # held by this process already (a nested compile): flock would wait for itself
+    if fcntl is None or getattr(_state, "held", False):   # held by this thread already: flock would wait for itself
         yield
         return
     folder = numba_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "compile.lock", "w") as fh:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fh = open(folder / "compile.lock", "w")
+    except OSError:
+        yield
+        return
+    with fh:
         fcntl.flock(fh, fcntl.LOCK_EX)
-        _held = True
+        _state.held = True
         try:
             yield
         finally:
-            _held = False
+            _state.held = False
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
-_held = False
+_state = threading.local()
 
 
 if not os.environ.get("NUMBA_CACHE_DIR"):

@@ -327,7 +327,8 @@ def simulate_compiled(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, q
                       integrator: str, rtol: float, atol: float, step, output_step: float,
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
                       max_evaluations: float, min_step: float, **method_options) -> SimulationResult:
-    """The compiled backend of ``study.simulate.simulate`` (arguments already checked there)."""
+    """The compiled backend of ``study.simulate.simulate`` (arguments already checked there; what the compiled
+    backend supports again here, for a direct call)."""
     check_supported(integrator, acceleration_solver, progress)
     s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)

@@ -229,6 +229,7 @@ def consistent_state(d: Description, ps: ParameterSet, eom: EquationsOfMotion, g
     independent coordinates set to the specified values, then the rates; the result must lie on the
     description's assembly branch (InitialConditionError otherwise)."""
     ic = ps.initial
+    start = "the printed q(0)" if guess is None else "the initial guess"
     guess = np.array(ic.printed_q if guess is None else guess, dtype=float)
     if guess.shape != (eom.n_coordinates,):
         raise ValueError(f"{d.name}: the initial guess has {guess.size} positions, the equations have "
@@ -238,7 +239,7 @@ def consistent_state(d: Description, ps: ParameterSet, eom: EquationsOfMotion, g
     if not _on_branch(d, state.q):
         expr, label = d.branch
         raise InitialConditionError(
-            f"{d.name}: Newton from the printed q(0) converged to q = {state.q}, which is not on the "
+            f"{d.name}: Newton from {start} converged to q = {state.q}, which is not on the "
             f"assembly branch '{label}' (the parameter file's '{ic.branch}'): its condition {expr} > 0 is "
             f"{_branch_value(d, state.q):.6g} there; change the printed q(0) or the guess")
     return state

@@ -47,7 +47,8 @@ def description_key(b: MechanismBuilder) -> str:
     parts += [sp.srepr((x.name, x.point.name, x.components)) for x in b.point_loads]
     parts += [sp.srepr((x.name, x.body.name, x.torque)) for x in b.torque_loads]
     parts += [sp.srepr(x) for x in b.switches]
-    parts += [sp.srepr((c.name, c.point.name, c.normal, c.tangent, c.guide.name)) for c in b.contacts if c.guide]
+    parts += [sp.srepr((c.name, c.point.name, c.normal, c.tangent, c.mu_static, c.mu_kinetic, c.resistance,
+                        c.guide.name if c.guide else None)) for c in b.contacts]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 

@@ -16,7 +16,7 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     [[group]]
     name = "reference"                          # readable, unique within the study
     engine = "inhouse"                          # or "exudyn"
-    mechanism = "quick_return"
+    mechanism = "quick_return"                  # or a user's mechanism file, "my_mechanism.py" (relative to this list)
     variant = "seed"
     t_end = 20.0
     options = { integrator = "DOP853", rtol = 1e-12, method = "projection" }
@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from study import arguments
+from study.mechanisms import is_user_file, named_mechanism
 from study.params import REFERENCE_DIR
 from study.pipeline.keys import code_version, mechanism_hash
 from study.reference_data import tolerance
@@ -243,14 +244,13 @@ def _check_group(g: Mapping, where: str) -> None:
 
 def _check_case(case: Case, where: str) -> None:
     """A case's mechanism and variant exist and its options are arguments of its engine, of their types."""
-    from study.mechanisms import is_user_file, named_mechanism
     from study.params import available_mechanisms, available_variants
 
     if is_user_file(case.mechanism):
         try:
             named_mechanism(case.mechanism, case.variant)
         except Exception as exc:   # anything a user's file raises is a problem of the case list's input
-            raise CaseListError(f"{where}: mechanism = {case.mechanism!r}: {type(exc).__name__}: {exc}") from None
+            raise CaseListError(f"{where}: mechanism = {case.mechanism!r}: {type(exc).__name__}: {exc}") from exc
     else:
         known = available_mechanisms()
         if case.mechanism not in known:
@@ -345,7 +345,7 @@ def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case
             continue
         if case_fields["mechanism"] is None or case_fields["t_end"] is None:
             raise CaseListError(f"{where}: 'mechanism' and 't_end' are required")
-        if str(case_fields["mechanism"]).endswith(".py"):   # a user's file, relative to the case list's folder
+        if is_user_file(str(case_fields["mechanism"])):   # a user's file, relative to the case list's folder
             case_fields["mechanism"] = str((folder / case_fields["mechanism"]).resolve())
         if backend is not None:   # a sweep entry's own backend option (e.g. an integrator only the
             options.setdefault("backend", backend)   # reference path has) is stated there and wins
