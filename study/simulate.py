@@ -12,7 +12,7 @@ from threadpoolctl import threadpool_limits
 from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
-from study.fast.support import SCIPY_STEPS_ONLY, check_supported
+from study.fast.support import SCIPY_STEPS_ONLY, check_no_pin_friction, check_supported
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
@@ -143,6 +143,10 @@ def simulate(
         also sets the band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. A
         width or sgn the chosen treatment does not use is refused. The result gains
         forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
+        Revolute joints with friction (``Description.revolute(..., friction=, radius=)``) follow the contacts in
+        these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque on the joint's first body
+        [N m], ``friction_eps`` read in rad/s); they take 'regularized' or 'sign' on backend 'reference' only:
+        'exact' and backend='compiled' are refused.
     resistance_reading : {None, 'holds', 'sliding_only'}
         Whether a contact's constant resistance counts in the static limit of the 'exact' treatment
         (``study.solver.friction.RESISTANCE_READINGS``). None: the parameter set's
@@ -191,6 +195,12 @@ def simulate(
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, mech = resolve(eom_or_mechanism, variant)
+    pins = tuple(p.name for p in getattr(eom, "pin_frictions", ()))
+    if pins and friction == "exact":   # refused, never a silent fallback
+        raise ValueError(f"friction='exact' (stick/slip) is not implemented for revolute joints with friction "
+                         f"({', '.join(map(repr, pins))} of {eom.name!r}): use friction='regularized' or 'sign'")
+    if backend == "compiled":
+        check_no_pin_friction(eom, friction)
     ps = None if mech is None else mech.parameters
     index3 = integrator == INDEX3
     if index3 and eom.indicators is not None:
@@ -389,7 +399,7 @@ def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_en
     the estimate and the argument that raises the bound (the user's confirmation).
     """
     m, r = eom.n_coordinates, eom.n_constraints
-    n_contacts = len(eom.contacts) if friction is not None else 0
+    n_contacts = len(eom.contacts) + len(getattr(eom, "pin_frictions", ())) if friction is not None else 0
     columns = 1 + 3 * m + 3 * r + 2 + len(eom.applied_forces(0.0, q0, qd0)) + 4 * n_contacts
     samples = t_end / output_step + 2
     nbytes = samples * columns * tolerance("output_bytes_per_value")

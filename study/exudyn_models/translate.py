@@ -541,6 +541,11 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
     mech = as_mechanism(mechanism)
     kin = _kinematics(mech)
     d, subs = kin.d, kin.subs
+    pins = [j.name for j in d.joints if isinstance(j, Revolute) and j.friction is not None]
+    if pins and friction != "none":   # refused, never silently left out
+        raise ValueError(f"the Exudyn model does not implement friction in revolute joints "
+                         f"({', '.join(map(repr, pins))} of {d.name!r}): run it with friction='none' or use the "
+                         f"in-house reference path")
     val = lambda e: float(sp.sympify(e).xreplace(subs))  # noqa: E731
     g = val(d.gravity_g) if d.gravity_g is not None else 0.0
     model = Model()

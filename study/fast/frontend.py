@@ -34,7 +34,7 @@ with compile_lock():   # the entry kernels have declared signatures: they compil
                                  FAIL_STALL, FAIL_STEP, integrate_segment)
 from study.fast.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
-from study.fast.support import METHOD_IDS, check_supported
+from study.fast.support import METHOD_IDS, check_no_pin_friction, check_supported
 from study.model.eom import EquationsOfMotion
 from study.mechanisms import Mechanism
 from study.model.coordinates import lower
@@ -211,6 +211,7 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
     Same signature (t, y, mode) and the same count of evaluations in ``dyn.nfev``. Where the compiled solve fails,
     the reference ``dyn.rhs`` is evaluated at that state so that its error (singular system, Painleve case) is
     the one raised; if the reference succeeds there, the disagreement itself is raised."""
+    check_no_pin_friction(eom, getattr(dyn, "law", None))
     model, ci, cf = _pack(eom, mechanism, dyn)
     evaluate, bias = FunctionAddress(model.module.evaluate, EVALUATE), FunctionAddress(compiled_bias(dyn.stabilization), BIAS)
     phases = FunctionAddress(compiled_phases(dyn), PHASES)
@@ -330,6 +331,7 @@ def simulate_compiled(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, q
     """The compiled backend of ``study.simulate.simulate`` (arguments already checked there; what the compiled
     backend supports again here, for a direct call)."""
     check_supported(integrator, acceleration_solver, progress)
+    check_no_pin_friction(eom, friction)
     s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()

@@ -81,6 +81,21 @@ class Contact:
     guide: Body | None = None
 
 
+@dataclass(frozen=True)
+class PinFriction:
+    """Coulomb friction of a revolute cut joint whose rows are ``rows`` (x, y: their multipliers are its reaction
+    R): a torque tau = -(mu r |R|_delta + torque) s(omega_rel) on ``body_a`` and -tau on ``body_b`` (None: ground),
+    omega_rel = theta_a' - theta_b'."""
+
+    name: str
+    rows: tuple[str, str]
+    body_a: Body | None
+    body_b: Body | None
+    mu: Expr
+    radius: Expr
+    torque: Expr
+
+
 class MechanismBuilder:
     """Collect a planar mechanism's description (compiled by :func:`study.model.compile.compile_description`).
 
@@ -111,6 +126,7 @@ class MechanismBuilder:
         self.point_loads: list[PointLoad] = []
         self.torque_loads: list[TorqueLoad] = []
         self.contacts: list[Contact] = []
+        self.pin_frictions: list[PinFriction] = []
         self.gravity_g: Expr | None = None
         self.t = sp.Symbol("t", real=True)
         self.switches: list[tuple[str, Expr, sp.Symbol]] = []
@@ -174,6 +190,13 @@ class MechanismBuilder:
         c = Contact(name, point, n, t, *(sp.sympify(v) for v in (mu_static, mu_kinetic, resistance)), guide=guide)
         self.contacts.append(c)
         return c
+
+    def pin_friction(self, name: str, rows, body_a: Body | None, body_b: Body | None, mu: Any, radius: Any,
+                     torque: Any = 0) -> PinFriction:
+        """Coulomb friction of a revolute joint whose two constraint rows (already added) are ``rows``."""
+        pin = PinFriction(name, tuple(rows), body_a, body_b, *(sp.sympify(v) for v in (mu, radius, torque)))
+        self.pin_frictions.append(pin)
+        return pin
 
     # --- checks -------------------------------------------------------------
     def validate(self) -> None:

@@ -23,7 +23,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
-from study.model.eom import EquationsOfMotion, SlidingContact
+from study.model.eom import EquationsOfMotion, PinFriction, SlidingContact
 from study.sources import source_files, source_hash
 
 def cache_dir() -> Path:
@@ -200,6 +200,19 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
             resistance=float(c.resistance.subs(subs)),
         ))
 
+    constraint_names = [name for name, _ in b.constraints]
+    pins = []
+    for pin in b.pin_frictions:
+        jacs = [None if body is None else f[f"angle_jac__{body.name}"] for body in (pin.body_a, pin.body_b)]
+
+        def rate_jacobian(q, ja=jacs[0], jb=jacs[1], m=len(b.q)):   # d(omega_a - omega_b)/dqd
+            out = np.zeros(m) if ja is None else np.array(ja(q), dtype=float)
+            return out if jb is None else out - jb(q)
+
+        pins.append(PinFriction(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
+                                rate_jacobian=rate_jacobian, mu=float(pin.mu.subs(subs)),
+                                radius=float(pin.radius.subs(subs)), torque=float(pin.torque.subs(subs))))
+
     return EquationsOfMotion(
         n_coordinates=len(b.q),
         n_constraints=len(b.constraints),
@@ -212,6 +225,7 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
         coordinate_names=b.coordinate_names,
         constraint_names=tuple(name for name, _ in b.constraints),
         contacts=tuple(contacts),
+        pin_frictions=tuple(pins),
         potential_energy=f["potential"],
         applied_forces=applied_forces,
         indicators=indicators,

@@ -48,7 +48,8 @@ def _poses_relative(d: Description) -> tuple[dict[str, tuple[sp.Matrix, sp.Expr]
     while changed:  # sweep the joints in order until no body can be placed any more
         changed = False
         for j in d.joints:
-            if j.name in tree or isinstance(j, Distance) or (j.cut if isinstance(j, Revolute) else j.travel is None):
+            if j.name in tree or isinstance(j, Distance) or \
+                    ((j.cut or j.friction is not None) if isinstance(j, Revolute) else j.travel is None):
                 continue
             for (pa, ta), (pb, tb) in _tree_ends(j):
                 if pa in poses and pb not in poses:
@@ -91,6 +92,8 @@ def _why_unplaced(d: Description, body: str, poses) -> str:
             reasons.append(f"{j.name!r} is a distance joint (a constraint row, never a tree joint)")
         elif isinstance(j, Revolute) and j.cut:
             reasons.append(f"{j.name!r} is marked cut=True")
+        elif isinstance(j, Revolute) and j.friction is not None:
+            reasons.append(f"{j.name!r} has friction (a cut joint: its reaction is its rows' multipliers)")
         elif isinstance(j, Prismatic) and j.travel is None:
             reasons.append(f"{j.name!r} is a prismatic joint without a travel")
         elif other not in poses:
@@ -219,6 +222,11 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
         else:
             for row in rows:
                 b.constraint(*row)
+            if isinstance(jnt, Revolute) and jnt.friction is not None:   # its two rows' multipliers: the reaction
+                fr = jnt.friction
+                b.pin_friction(jnt.name, [n for n, _ in rows], *(None if e[0] == GROUND else bodies[e[0]]
+                                                                  for e in (jnt.a, jnt.b)),
+                               fr.mu_kinetic, jnt.radius, fr.resistance)
     m, r = len(names), len(b.constraints)
     if r >= m:
         held = ", ".join(f"{n!r} ({_count(k, 'row')})" for n, k in counts if k)

@@ -57,6 +57,31 @@ class SlidingContact:
                 raise ValueError(f"contact {self.name!r}: {key} = {value!r} must be finite and >= 0")
 
 
+@dataclass(frozen=True)
+class PinFriction:
+    """Coulomb friction of a revolute joint whose reaction R is the multipliers of constraint rows ``rows`` (x, y).
+
+    The friction torque on the relative rotation is tau = -(mu radius |R|_delta + torque) s(omega_rel),
+    omega_rel = rate_jacobian(q) @ qd, and its generalized force rate_jacobian(q) * tau (the torque on one body,
+    minus it on the other). |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) (``pin_friction_norm_width`` in
+    reference/tolerances.toml).
+    """
+
+    name: str
+    rows: tuple[int, int]
+    rate_jacobian: Callable[[Array], Array]
+    mu: float
+    radius: float
+    torque: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("mu", "radius", "torque"):
+            value = getattr(self, key)
+            if not np.isfinite(value) or value < 0 or (key == "radius" and value == 0):
+                raise ValueError(f"pin {self.name!r}: {key} = {value!r} must be finite and "
+                                 f"{'> 0' if key == 'radius' else '>= 0'}")
+
+
 def _no_forces(t: float, q: Array, qd: Array) -> dict[str, Array]:
     return {}
 
@@ -80,6 +105,8 @@ class EquationsOfMotion:
         ``-(Phi_q qd)_q qd``.
     contacts : sequence of SlidingContact
         Sliding joints with Coulomb friction (optional).
+    pin_frictions : sequence of PinFriction
+        Revolute joints with Coulomb friction (optional; reference backend, 'regularized' and 'sign').
     potential_energy : callable (q) -> float, optional
         Potential of the conservative loads included in ``forces`` (gravity, springs).
     applied_forces : callable (t, q, qd[, mode]) -> dict[str, (m,)], optional
@@ -106,6 +133,7 @@ class EquationsOfMotion:
     coordinate_names: tuple[str, ...] = ()
     constraint_names: tuple[str, ...] = ()
     contacts: tuple[SlidingContact, ...] = ()
+    pin_frictions: tuple[PinFriction, ...] = ()
     potential_energy: Callable[[Array], float] | None = None
     applied_forces: Callable[..., Mapping[str, Array]] = _no_forces
     indicators: Callable[[float, Array, Array], Array] | None = None
@@ -128,6 +156,9 @@ class EquationsOfMotion:
             problems.append(f"{len(self.coordinate_names)} coordinate_names for {m} coordinates")
         if self.constraint_names and len(self.constraint_names) != r:
             problems.append(f"{len(self.constraint_names)} constraint_names for {r} constraints")
+        for pin in self.pin_frictions:
+            if not all(0 <= k < (r if isinstance(r, int) else 0) for k in pin.rows):
+                problems.append(f"pin {pin.name!r}: rows {pin.rows} outside 0..{r - 1}")
         for c in self.contacts:
             if not 0 <= c.constraint_index < (r if isinstance(r, int) else 0):
                 problems.append(f"contact {c.name!r}: constraint_index {c.constraint_index} outside 0..{r - 1}")

@@ -14,6 +14,8 @@ Conventions
   named points are given in that frame. Ground points are given in the global frame.
 * ``revolute(name, (A, a), (B, b))``: point a of body A coincides with point b of body B (either may
   be ``GROUND``). Constraint rows ``r_A(a) - r_B(b) = 0`` (two rows, ``<name>_x`` and ``<name>_y``).
+  ``friction=Friction(mu, mu, T0), radius=r``: Coulomb pin friction, a torque -(mu r |R|_delta + T0) s(omega_rel)
+  on the relative rotation (R = the two rows' multipliers, so the joint is always a cut joint; see :class:`Revolute`).
 * ``prismatic(name, slider=(S, s), guide=(G, g), axis, normal)``: point s of body S slides on the
   line through point g of G along ``axis`` (G's frame); ``normal`` (G's frame, unit, orthogonal to
   the axis) orients the gap row ``<name> = n . (r_S(s) - r_G(g))``, so its multiplier lambda is a
@@ -69,19 +71,33 @@ class Body:
 
 @dataclass(frozen=True)
 class Friction:
-    """Coulomb contact data of a prismatic joint: mu_s, mu_k and a constant resistance F [N]."""
+    """Coulomb contact data of a prismatic joint: mu_s, mu_k and a constant resistance F [N].
+
+    On a revolute joint (``revolute(..., friction=Friction(mu, mu), radius=r)``) the same data is pin friction:
+    mu_kinetic is the pin's coefficient, ``resistance`` a constant friction torque T0 [N m] (mu_static is not used
+    by the treatments implemented for pins, 'regularized' and 'sign')."""
 
     mu_static: Expr
     mu_kinetic: Expr
     resistance: Expr = sp.Integer(0)
 
 
+_SET_ONLY = {"canonical_if_set": True}   # a field left out of the fingerprint while None (added after the study began)
+
+
 @dataclass(frozen=True)
 class Revolute:
+    """``friction`` with ``radius`` (the pin's radius r [m]): Coulomb pin friction, a torque
+    tau = -(mu_k r |R|_delta + T0) s(omega_rel) on body a and -tau on body b, R the joint's reaction (the multipliers
+    of its two rows), omega_rel = theta_a' - theta_b'. Such a joint is always a cut joint (its reaction is its rows'
+    multipliers; ``cut=False`` with friction is refused)."""
+
     name: str
     a: tuple[str, str]
     b: tuple[str, str]
     cut: bool | None = None
+    friction: Friction | None = dataclasses.field(default=None, metadata=_SET_ONLY)
+    radius: Expr | None = dataclasses.field(default=None, metadata=_SET_ONLY)
 
 
 @dataclass(frozen=True)
@@ -193,9 +209,12 @@ class Description:
         return (GROUND, name)
 
     # --- joints ------------------------------------------------------------------------------
-    def revolute(self, name: str, a: tuple[str, str], b: tuple[str, str], cut: bool | None = None) -> None:
-        """Point a[1] of body a[0] coincides with point b[1] of body b[0]; ``cut`` forces a loop closure."""
-        self.joints.append(Revolute(name, tuple(a), tuple(b), cut))
+    def revolute(self, name: str, a: tuple[str, str], b: tuple[str, str], cut: bool | None = None,
+                 friction: Friction | None = None, radius: Any = None) -> None:
+        """Point a[1] of body a[0] coincides with point b[1] of body b[0]; ``cut`` forces a loop closure.
+        ``friction`` and ``radius`` [m]: Coulomb pin friction (see :class:`Revolute`); the joint is then a cut joint."""
+        self.joints.append(Revolute(name, tuple(a), tuple(b), cut, friction,
+                                    None if radius is None else sp.sympify(radius)))
 
     def prismatic(self, name: str, slider: tuple[str, str], guide: tuple[str, str], axis, normal,
                   angle_offset: Any = 0, friction: Friction | None = None, travel: Any = None) -> None:
@@ -286,6 +305,10 @@ class Description:
         """The assembly branch: ``expr(q) > 0`` on the intended configuration."""
         self.branch = (sp.sympify(expr), label)
 
+    def pins(self) -> list[Revolute]:
+        """The revolute joints with friction (cut joints whose reaction sets a friction torque)."""
+        return [j for j in self.joints if isinstance(j, Revolute) and j.friction is not None]
+
     def contacts(self) -> list[Prismatic]:
         return [j for j in self.joints if isinstance(j, Prismatic) and j.friction is not None]
 
@@ -363,6 +386,8 @@ class Description:
                 check_point(f"joint {j.name!r}", j.b)
                 if isinstance(j, Distance) and j.length.free_symbols - params:
                     problems.append(f"joint {j.name!r}: length must be a constant (numbers and parameters)")
+                if isinstance(j, Revolute):
+                    problems += _pin_problems(j, params, values)
             else:
                 check_point(f"joint {j.name!r}", j.slider)
                 check_point(f"joint {j.name!r}", j.guide)
@@ -434,12 +459,42 @@ class Description:
             raise DescriptionError(f"mechanism {self.name!r}: " + "; ".join(problems))
 
 
+def _pin_problems(j: Revolute, params: set, values: dict) -> list[str]:
+    """What is wrong with a revolute joint's friction data (radius, coefficients, constant torque, cut)."""
+    if j.friction is None:
+        return [] if j.radius is None else [f"joint {j.name!r}: radius is given without friction (it is the pin's "
+                                            f"radius for friction=Friction(...))"]
+    out = []
+    if j.cut is False:
+        out.append(f"joint {j.name!r}: a revolute joint with friction is a cut joint (its reaction, which sets the "
+                   f"friction torque, is the multipliers of its rows), so it cannot be cut=False")
+    if j.radius is None:
+        out.append(f"joint {j.name!r}: friction on a revolute joint needs radius=r (the pin's radius [m])")
+    fr = j.friction
+    for key, e, positive in (("radius", j.radius, True), ("friction.mu_kinetic", fr.mu_kinetic, False),
+                             ("friction.mu_static", fr.mu_static, False),
+                             ("friction.resistance (the constant torque T0)", fr.resistance, False)):
+        if e is None:
+            continue
+        e = sp.sympify(e)
+        if e.free_symbols - params:
+            out.append(f"joint {j.name!r}: {key} must be a constant (numbers and parameters)")
+            continue
+        v = e.xreplace(values)
+        ok = v.is_finite and (v.is_extended_positive if positive else v.is_extended_nonnegative)
+        if not ok:
+            out.append(f"joint {j.name!r}: {key} = {v} must be finite and {'> 0' if positive else '>= 0'}")
+    return out
+
+
 def _canonical(obj: Any) -> str:
     """A text that is the same for equal content in every process: sympy objects by srepr, containers recursively."""
     if isinstance(obj, (sp.Basic, sp.MatrixBase)):
         return sp.srepr(obj)
     if dataclasses.is_dataclass(obj):
-        return type(obj).__name__ + _canonical({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
+        kept = [f for f in dataclasses.fields(obj)
+                if not (f.metadata.get("canonical_if_set") and getattr(obj, f.name) is None)]
+        return type(obj).__name__ + _canonical({f.name: getattr(obj, f.name) for f in kept})
     if isinstance(obj, SimpleNamespace):
         obj = vars(obj)
     if isinstance(obj, dict):

@@ -11,13 +11,15 @@ One module per concept:
 The names below are re-exported, so ``from study.solver.friction import FrictionDynamics`` works.
 """
 
-from study.solver.friction.contact import CONSISTENCY_RTOL, ContactSolution, FrictionDynamics, PainleveError
+from study.solver.friction.contact import (CONSISTENCY_RTOL, ContactSolution, FrictionDynamics, PainleveError,
+                                           PinFrictionError)
 from study.solver.friction.laws import (DEFAULT_EPS, FRICTION_TREATMENTS, RESISTANCE_READINGS, ExactCoulomb,
                                         PlainSign, RegularizedCoulomb, make_friction)
 from study.solver.friction.switching import FrictionLawError, StickSlipSwitching
 
 __all__ = [
     "CONSISTENCY_RTOL", "DEFAULT_EPS", "FRICTION_TREATMENTS", "RESISTANCE_READINGS", "ContactSolution",
-    "ExactCoulomb", "FrictionDynamics", "FrictionLawError", "PainleveError", "PlainSign", "RegularizedCoulomb",
+    "ExactCoulomb", "FrictionDynamics", "FrictionLawError", "PainleveError", "PinFrictionError", "PlainSign",
+    "RegularizedCoulomb",
     "StickSlipSwitching", "make_friction",
 ]

@@ -24,6 +24,15 @@ reduced to the contacts. A hypothesis is consistent if sigma_j N_j >= 0 for ever
 Exactly one consistent solution is used. None, or two that differ, is Painleve's paradox
 (friction makes the normal force ill-posed) and raises :class:`PainleveError`; nothing is chosen
 silently. The treatments of sgn are in :mod:`study.solver.friction.laws`.
+
+Revolute joints with friction (:class:`study.model.PinFriction`, cut joints whose reaction R_p is the multipliers
+of their two rows) add a torque tau_p = -(mu_p r_p |R_p|_delta + T0_p) s(omega_p) on the relative rotation,
+generalized force P_p^T tau_p (P_p = d omega_p / d qd). R depends on tau affinely (R = R_0 + L tau, L the
+joints' unit-torque responses) and tau on |R|: the small nonlinear system tau = g(tau) is solved by Newton
+(``pin_friction_solve_rtol``), around the contacts' solve above, which is repeated at every iterate. s is the
+treatment's slip factor of omega [rad/s] ('regularized', 'sign'; its width friction_eps read in rad/s); 'exact'
+stick/slip of a pin is not implemented and refused. The pins follow the contacts in every per-contact output
+(``normal_<pin>`` = |R| [N], ``friction_<pin>`` = tau [N m], ``work_friction_<pin>`` = its work).
 """
 
 from __future__ import annotations
@@ -33,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from study.reference_data import tolerance
 from study.solver.dynamics import Dynamics
 from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb
 
@@ -43,6 +53,17 @@ Array = np.ndarray
 # study's mechanisms, so its round-off is below 1e5 * 2.2e-16 ~ 2e-11 relative; 1e-10 rejects a
 # hypothesis only when N_j has the wrong sign by more than round-off.
 CONSISTENCY_RTOL = 1e-10
+
+#: Iterations allowed to the Newton solve of the pins' friction torques before PinFrictionError.
+PIN_MAX_ITERATIONS = 50
+
+
+class PinFrictionError(RuntimeError):
+    """The friction torques of revolute joints did not converge (``joints``, ``t``, ``q``, ``qd`` as attributes)."""
+
+    def __init__(self, message: str, joints: tuple[str, ...], t: float, q, qd):
+        super().__init__(message)
+        self.joints, self.t, self.q, self.qd = joints, t, np.array(q), np.array(qd)
 
 
 class PainleveError(RuntimeError):
@@ -98,14 +119,32 @@ class FrictionDynamics(Dynamics):
 
     law: ExactCoulomb | RegularizedCoulomb | PlainSign | None = None
     n_load_modes: int = 0
+    pin_norm_width: float | None = None   # delta [N] of |R|_delta; None: tolerance("pin_friction_norm_width")
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.law is None:
             raise ValueError("FrictionDynamics needs a friction treatment (law=make_friction(...))")
-        if not self.eom.contacts:
-            raise ValueError(f"EquationsOfMotion {self.eom.name!r} has no sliding contacts: friction needs at least one")
-        self._index = np.array([c.constraint_index for c in self.eom.contacts])
+        pins = tuple(getattr(self.eom, "pin_frictions", ()))
+        if not self.eom.contacts and not pins:
+            raise ValueError(f"EquationsOfMotion {self.eom.name!r} has no sliding contacts and no revolute joints with "
+                             f"friction: friction needs at least one")
+        if pins and self.law.switched:
+            raise ValueError(f"friction {self.law.name!r} (stick/slip) is not implemented for revolute joints with "
+                             f"friction ({', '.join(repr(p.name) for p in pins)} of {self.eom.name!r}): use friction="
+                             f"'regularized' or 'sign'")
+        self._pins = pins
+        self._nc = len(self.eom.contacts)
+        if pins:
+            self._pin_rows = np.array([p.rows for p in pins], dtype=int)
+            self._pin_coef = np.array([p.mu * p.radius for p in pins])
+            self._pin_torque = np.array([p.torque for p in pins])
+            delta = tolerance("pin_friction_norm_width") if self.pin_norm_width is None else self.pin_norm_width
+            if not (np.isfinite(delta) and delta > 0):
+                raise ValueError(f"pin_norm_width = {delta!r} must be finite and > 0")
+            self._pin_delta = float(delta)
+            self._pin_rtol = tolerance("pin_friction_solve_rtol")
+        self._index = np.array([c.constraint_index for c in self.eom.contacts], dtype=int)
         self._mu_k = np.array([c.mu_kinetic for c in self.eom.contacts])
         self._mu_s = np.array([c.mu_static for c in self.eom.contacts])
         self._resistance = np.array([c.resistance for c in self.eom.contacts])
@@ -118,11 +157,13 @@ class FrictionDynamics(Dynamics):
 
     @property
     def contact_names(self) -> tuple[str, ...]:
-        return tuple(c.name for c in self.eom.contacts)
+        """The sliding contacts, then the revolute joints with friction."""
+        return tuple(c.name for c in self.eom.contacts) + tuple(p.name for p in self._pins)
 
     @property
     def n_contacts(self) -> int:
-        return len(self.eom.contacts)
+        """Entries of the per-contact outputs: sliding contacts and revolute joints with friction."""
+        return self._nc + len(self._pins)
 
     def load_mode(self, mode):
         if not self._modal or mode is None:
@@ -131,7 +172,7 @@ class FrictionDynamics(Dynamics):
 
     def phases(self, mode, v_t: Array) -> tuple[Array, Array]:
         """(stick flags, slip factors s) of the contacts in ``mode`` at tangential velocities ``v_t``."""
-        nc = self.n_contacts
+        nc = self._nc
         entries = None
         if self.law.switched:
             if mode is None or len(mode) != self.n_load_modes + 2 * nc:
@@ -146,6 +187,8 @@ class FrictionDynamics(Dynamics):
         c = eom.gamma(q, qd) + self.stabilization.bias(eom.phi(q), J @ qd)
         Jt = np.array([np.asarray(ct.tangent_jacobian(q), dtype=float) for ct in eom.contacts])
         bt = np.array([float(ct.tangent_bias(q, qd)) for ct in eom.contacts])
+        if not self._nc:
+            Jt = np.zeros((0, q.size))
         v_t = Jt @ qd
         if stick is None or s is None:
             stick_m, s_m = self.phases(mode, v_t)
@@ -163,7 +206,61 @@ class FrictionDynamics(Dynamics):
         Raises :class:`PainleveError` unless exactly one normal-force sign hypothesis is consistent.
         """
         M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, mode, stick, s)
-        return self._solve(t, M, Q, J, c, Jt, bt, v_t, stick, s)
+        if not self._pins:
+            return self._solve(t, M, Q, J, c, Jt, bt, v_t, stick, s)
+        return self._solve_pins(t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s)
+
+    def pin_torques(self, t: float, q: Array, qd: Array, tau: Array) -> tuple[Array, Array, Array]:
+        """(g(tau), |R|_delta, R) of the revolute joints with friction for given trial torques ``tau`` (no sliding
+        contacts): the torques their friction law gives for the reaction that ``tau`` produces (for checks)."""
+        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, None, None, None)
+        P = np.array([np.asarray(p.rate_jacobian(q), dtype=float) for p in self._pins])
+        sol = self._solve(t, M, Q + P.T @ tau, J, c, Jt, bt, v_t, stick, s)
+        R = sol.lam[self._pin_rows]
+        norm = np.sqrt(np.sum(R ** 2, axis=1) + self._pin_delta ** 2)
+        slip = self.law.phases(None, P @ qd)[1]
+        return -(self._pin_coef * norm + self._pin_torque) * slip, norm, R
+
+    def _solve_pins(self, t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s) -> ContactSolution:
+        """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s(omega) = 0 around the contacts' solve."""
+        pins, rows = self._pins, self._pin_rows
+        P = np.array([np.asarray(p.rate_jacobian(q), dtype=float) for p in pins])   # (np, m)
+        omega = P @ qd
+        slip = np.asarray(self.law.phases(None, omega)[1], dtype=float)
+        r = J.shape[0]
+        L = np.array([self.accelerations.solve(M, P[i], J, np.zeros(r))[1] for i in range(len(pins))])  # (np, r)
+        dR = L[:, rows]                        # dR[j, i, :]: reaction of pin i per unit torque at pin j
+        tau = np.zeros(len(pins))
+        history = []
+        for _ in range(PIN_MAX_ITERATIONS):
+            sol = self._solve(t, M, Q + P.T @ tau, J, c, Jt, bt, v_t, stick, s)
+            R = sol.lam[rows]                  # (np, 2)
+            norm = np.sqrt(np.sum(R ** 2, axis=1) + self._pin_delta ** 2)
+            level = self._pin_coef * norm + self._pin_torque
+            F = tau + level * slip
+            history.append(float(np.max(np.abs(F))))
+            if np.all(np.abs(F) <= self._pin_rtol * np.maximum(level, np.abs(tau))):
+                return ContactSolution(sol.qdd, sol.lam, np.concatenate([sol.normal, np.sqrt(np.sum(R ** 2, axis=1))]),
+                                       np.concatenate([sol.friction, tau]), np.concatenate([sol.v_t, omega]),
+                                       np.concatenate([sol.stick, np.zeros(len(pins), dtype=bool)]),
+                                       np.concatenate([sol.margin, np.full(len(pins), np.nan)]))
+            jac = np.eye(len(pins)) + (self._pin_coef * slip / norm)[:, None] * np.einsum("ik,jik->ij", R, dR)
+            try:
+                step = np.linalg.solve(jac, F)
+            except np.linalg.LinAlgError:
+                break
+            if not np.all(np.isfinite(step)):
+                break
+            tau = tau - step
+        names = tuple(p.name for p in pins)
+        raise PinFrictionError(
+            f"t = {t:.9g} s: the friction torques of revolute joint(s) {', '.join(map(repr, names))} did not converge "
+            f"in {len(history)} Newton iterations (max |tau - g(tau)| per iteration: "
+            f"{', '.join(f'{h:.3g}' for h in history[-5:])} N m; relative tolerance {self._pin_rtol:g}) at "
+            f"q = {np.array2string(np.asarray(q), precision=6)}, qd = {np.array2string(np.asarray(qd), precision=6)}: "
+            f"a likely cause is mu * radius too large for the joint's unit-torque reaction (|mu r s dR/dtau| >= 1)",
+            names, float(t),
+            q, qd)
 
     def hypotheses(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> list[dict]:
         """Every normal-force sign hypothesis at one state: dicts with sigma ({contact index: +-1}),
@@ -173,7 +270,7 @@ class FrictionDynamics(Dynamics):
 
     def _hypotheses(self, M, Q, J, c, Jt, bt, stick, s):
         """Yield dicts (sigma, f, qdd, lam, normal, tol, consistent) for each sign hypothesis."""
-        nc, r, m = self.n_contacts, J.shape[0], M.shape[0]
+        nc, r, m = self._nc, J.shape[0], M.shape[0]
         k = self._index
         qdd_a, lam_a = self.accelerations.solve(M, Q, J, c)
         active = [j for j in range(nc) if stick[j] or s[j] != 0.0]

@@ -1,0 +1,300 @@
+"""Coulomb friction in a revolute joint: a pendulum on a ground pin with pin friction.
+
+The mechanism: a bar (mass m, centroidal inertia Ic) hangs from a ground pin O at its point (0, l) (body frame), so its
+centre of mass is r_G = (l sin th, -l cos th); vertical plane, gravity -y. In the study's description the bar is a
+free body (x, y, angle th) and the pin is a revolute joint with friction (friction=Friction(mu, mu, T0), radius=r),
+hence a cut joint whose two rows' multipliers are its reaction R; q = (th, x, y).
+
+Independent reference, derived by hand here in the minimal coordinate th, not from the description. The pin reaction
+on the bar, from the bar's Newton equation m a_G = R + m g_vec:
+
+    R = m (a_G + (0, g)),   a_G = l (th'' cos th - th'^2 sin th, th'' sin th + th'^2 cos th)
+
+and the moment equation about O (R passes through O):
+
+    (Ic + m l^2) th'' = -m g l sin th - (mu r |R|_delta + T0) s(th'),   |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2)
+
+R depends on th'', so th'' solves an implicit scalar equation: Newton below. s = tanh(. / eps) ('regularized') or
+sgn ('sign'). The pin's relative rate is omega_rel = theta_ground' - theta_bar' = -th' (the description's joint
+runs from ground to the bar), and the torque on the bar is -tau = -(mu r |R|_delta + T0) s(th'): the same law.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import study
+import study.solver.friction.contact as contact
+from study.model.coordinates import lower
+from study.model.joints import DescriptionError
+from study.reference_data import tolerance
+
+VALUES = dict(m=1.5, Ic=0.05, l=0.4, g=9.81, mu=0.3, r=0.1, T0=0.05)
+START = (1.0, 0.0)        # th, th': released from rest at 1 rad
+T_END = 1.5               # about two swings; the amplitude decays from 1 to ~0.55 rad
+RTOL = 1e-9
+EPS = 1e-3                # the treatment's width [rad/s] (friction_eps)
+OUTPUT_STEP = 0.01
+DELTA = tolerance("pin_friction_norm_width")
+
+
+def describe(ps: study.ParameterSet, cut=None, radius=True, relative=False) -> study.Description:
+    coords = ["th"] if relative else ["th", "x", "y"]
+    d = study.Description("pin_friction_pendulum", coords, {k: getattr(ps.values, k) for k in VALUES})
+    p = d.p
+    th = d.q[0]
+    d.ground("O", 0, 0)
+    d.body("bar", p.m, p.Ic, {"pin": (0, p.l)}, angle=th, position=None if relative else (d.q[1], d.q[2]))
+    d.revolute("pin", (study.GROUND, "O"), ("bar", "pin"), cut=cut, friction=study.Friction(p.mu, p.mu, p.T0),
+               radius=p.r if radius else None)
+    d.gravity(p.g)
+    return d
+
+
+def full_state(th, w, l=VALUES["l"]):
+    q = np.array([th, l * math.sin(th), -l * math.cos(th)])
+    return q, np.array([w, l * w * math.cos(th), l * w * math.sin(th)])
+
+
+@pytest.fixture(scope="module")
+def mech(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("pin")
+    q, qd = full_state(*START)
+    lines = ['[meta]\nmechanism = "pin_friction_pendulum"\npaper = "none: a test mechanism"\ndescription = "test"\n']
+    for k, v in VALUES.items():
+        lines.append(f'[parameters.{k}]\nvalue = {v!r}\nunit = "-"\nsource = "test"\nrule = "positive"\ndoc = "{k}"\n')
+    lines.append(f'[initial_conditions.printed]\nq = {q.tolist()}\nqd = {qd.tolist()}\nsource = "test"\n')
+    lines.append(f"[initial_conditions.consistent]\nindependent = [0]\nq_independent = {q[:1].tolist()}\n"
+                 f'qd_independent = {qd[:1].tolist()}\nbranch = "none"\nsource = "test"\n')
+    lines.append('[variants.seed]\nnote = "test"\n')
+    (tmp / "pin_friction_pendulum.toml").write_text("\n".join(lines))
+    ps = study.load_parameters("pin_friction_pendulum", reference_dir=tmp)
+    return study.Mechanism(describe(ps), ps)
+
+
+# --- the hand model ------------------------------------------------------------------------------------
+def hand_accel(th, w, s, v=VALUES, delta=DELTA):
+    """(th'', R) of the module docstring: Newton on G(a) = I_O a + m g l sin th + (mu r |R(a)|_delta + T0) s."""
+    m, l, g = v["m"], v["l"], v["g"]
+    io, c, sn = v["Ic"] + m * l * l, math.cos(th), math.sin(th)
+    k = v["mu"] * v["r"]
+
+    def reaction(a):
+        return m * l * (a * c - w * w * sn), m * (l * (a * sn + w * w * c) + g)
+
+    a = -m * g * l * sn / io
+    for _ in range(50):
+        rx, ry = reaction(a)
+        norm = math.sqrt(rx * rx + ry * ry + delta * delta)
+        G = io * a + m * g * l * sn + (k * norm + v["T0"]) * s
+        dG = io + k * s * m * l * (rx * c + ry * sn) / norm
+        step = G / dG
+        a -= step
+        if abs(step) <= 1e-15 * (1 + abs(a)):
+            return a, reaction(a)
+    raise AssertionError("hand Newton did not converge")
+
+
+def hand_regularized(t_grid, eps=EPS, delta=DELTA):
+    def rhs(t, y):
+        return [y[1], hand_accel(y[0], y[1], math.tanh(y[1] / eps), delta=delta)[0]]
+    sol = solve_ivp(rhs, (t_grid[0], t_grid[-1]), START, method="DOP853", rtol=tolerance("reference_rtol"),
+                    atol=tolerance("reference_atol"), t_eval=t_grid)
+    assert sol.success
+    return sol.y.T
+
+
+def hand_rk4(t_grid, h):
+    """Classical RK4 with step h and the plain sgn at every stage, sampled at t_grid (multiples of h)."""
+    def f(y):
+        return np.array([y[1], hand_accel(y[0], y[1], float(np.sign(y[1])))[0]])
+    y, out, t = np.array(START, dtype=float), [], 0.0
+    every = int(round((t_grid[1] - t_grid[0]) / h))
+    n = int(round(t_grid[-1] / h))
+    out.append(y.copy())
+    for i in range(1, n + 1):
+        k1 = f(y); k2 = f(y + h / 2 * k1); k3 = f(y + h / 2 * k2); k4 = f(y + h * k3)  # noqa: E702
+        y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if i % every == 0:
+            out.append(y.copy())
+    return np.array(out)
+
+
+def run(mech, **options):
+    return study.simulate(mech, t_end=T_END, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP,
+                          friction="regularized", friction_eps=EPS, friction_sgn="tanh", **options)
+
+
+@pytest.fixture(scope="module")
+def regularized(mech):
+    return run(mech)
+
+
+def balance_residual(r):
+    e = r.energies
+    change = e["kinetic"] + e["potential"] - e["kinetic"][0] - e["potential"][0]
+    return change - (e["work_friction_pin"] - e["work_friction_pin"][0])
+
+
+# --- tests -------------------------------------------------------------------------------------------
+def test_regularized_pin_friction_matches_the_hand_model(regularized):
+    r = regularized
+    hand = hand_regularized(r.t)
+    got = np.column_stack([r.q[:, 0], r.qd[:, 0]])
+    bound = tolerance("adaptive_global_error_factor") * RTOL
+    for k in (0, 1):
+        dev = np.abs(got[:, k] - hand[:, k]).max()
+        print(f"pin friction vs hand model, column {k}: max dev {dev:.3g} "
+              f"(bound {bound * np.abs(hand[:, k]).max():.3g})")
+        assert dev <= bound * np.abs(hand[:, k]).max(), k
+    # the friction acted: the amplitude decays well below the frictionless 1 rad
+    assert np.abs(hand[-60:, 0]).max() < 0.8
+    # the reported reaction and torque are the hand model's
+    R = np.array([hand_accel(th, w, math.tanh(w / EPS))[1] for th, w in hand])
+    tau_bar = -(VALUES["mu"] * VALUES["r"] * np.sqrt((R ** 2).sum(axis=1) + DELTA ** 2) + VALUES["T0"]) \
+        * np.tanh(hand[:, 1] / EPS)
+    assert np.abs(r.forces["normal_pin"] - np.hypot(*R.T)).max() <= 1e-5 * np.hypot(*R.T).max()
+    # the study's friction_pin is tau on body a (ground): minus the torque on the bar
+    assert np.abs(-r.forces["friction_pin"] - tau_bar).max() <= 1e-4 * np.abs(tau_bar).max() + 1e-6
+
+
+def test_energy_balance_and_dissipation(regularized):
+    r = regularized
+    e = r.energies
+    scale = tolerance("energy_drift_factor") * RTOL * e["kinetic"].max()
+    residual = np.abs(balance_residual(r)).max()
+    print(f"energy balance residual {residual:.3g} J (bound {scale:.3g}), "
+          f"dissipated {-e['work_friction_pin'][-1]:.4g} J")
+    assert residual <= scale
+    w = e["work_friction_pin"]
+    assert w[-1] < -0.5 and np.diff(w).max() <= scale   # dissipation -w never decreases
+
+
+def test_norm_width_effect_is_as_estimated(mech, regularized, monkeypatch):
+    """delta and delta/10: |R|_delta - |R| ~ delta^2 / (2 |R|), so the friction torque changes by
+    dtau <= mu r delta^2 / (2 R_min) (R_min the smallest reaction of the run, ~8 N here: ~2e-9 N m) and th by at
+    most dtau T^2 / (2 I_O) (~7e-9 rad over 1.5 s), plus the two runs' integration noise (10 rtol |th|). Measured:
+    5.8e-10 rad, the same as the hand model's delta vs delta/10 at rtol 1e-12 (5.8e-10 rad): a real, tiny effect,
+    1e-2 of the adaptive global error bound."""
+    original = contact.tolerance
+    monkeypatch.setattr(contact, "tolerance",
+                        lambda key, table="tolerances": DELTA / 10 if key == "pin_friction_norm_width"
+                        else original(key, table))
+    tenth = run(mech)
+    diff = np.abs(tenth.q[:, 0] - regularized.q[:, 0]).max()
+    r_min = regularized.forces["normal_pin"].min()
+    io = VALUES["Ic"] + VALUES["m"] * VALUES["l"] ** 2
+    estimate = VALUES["mu"] * VALUES["r"] * DELTA ** 2 / (2 * r_min) * T_END ** 2 / (2 * io)
+    bound = estimate + 10 * RTOL * np.abs(regularized.q[:, 0]).max()
+    print(f"delta vs delta/10: max |d th| = {diff:.3g} rad (estimate {estimate:.3g}, bound {bound:.3g}); "
+          f"min |R| = {r_min:.3g} N")
+    assert r_min > 5.0
+    assert diff <= bound
+
+
+def test_sign_treatment_with_rk4_matches_the_hand_rk4(mech):
+    h = 1e-3
+    r = study.simulate(mech, t_end=1.0, integrator="RK4", step=h, output_step=OUTPUT_STEP, friction="sign")
+    hand = hand_rk4(r.t, h)
+    dev = np.abs(r.q[:, 0] - hand[:, 0]).max()
+    print(f"sign/RK4 vs hand RK4: max |d th| = {dev:.3g}")
+    # same steps, same law: the difference is round-off (th' changes sign once, near 0.68 s: sgn jumps inside steps)
+    assert dev <= tolerance("fast_fixed_step_agreement") * np.abs(hand[:, 0]).max()
+
+
+@pytest.mark.parametrize("options, what", [(dict(friction="exact"), "friction='exact' (stick/slip)"),
+                                           (dict(friction="regularized", backend="compiled"), "backend='compiled'")])
+def test_exact_and_compiled_are_refused_by_name(mech, options, what):
+    with pytest.raises(ValueError, match=rf"{re.escape(what)} is not implemented for revolute joints with friction "
+                                          rf"\('pin' of 'pin_friction_pendulum'\)"):
+        study.simulate(mech, t_end=0.1, **options)
+
+
+def test_compiled_entry_points_refuse_pin_friction(mech):
+    from study.fast.support import check_no_pin_friction
+
+    eom = mech.equations()
+    check_no_pin_friction(eom, None)     # friction off: the pins' data is ignored, as the contacts' is
+    with pytest.raises(ValueError, match=r"backend='compiled' is not implemented for revolute joints with friction "
+                                         r"\('pin' of 'pin_friction_pendulum'\)"):
+        check_no_pin_friction(eom, "regularized")
+
+
+def test_unconverged_torque_solve_names_joint_time_and_state(mech, monkeypatch):
+    from study.solver.run import build_dynamics
+
+    eom = mech.equations()
+    q, qd = full_state(0.3, -2.0)
+    dyn, _, _ = build_dynamics(eom, q, qd, method="none", acceleration_solver="multiplier", friction="regularized",
+                               friction_eps=EPS, friction_sgn="tanh")
+    sol = dyn.contact_solution(0.25, q, qd)     # converges: the hand model's th'' and reaction
+    a, R = hand_accel(0.3, -2.0, math.tanh(-2.0 / EPS))
+    assert abs(sol.qdd[0] - a) <= 1e-12 * abs(a) and abs(sol.normal[0] - math.hypot(*R)) <= 1e-12 * math.hypot(*R)
+    monkeypatch.setattr(contact, "PIN_MAX_ITERATIONS", 1)
+    with pytest.raises(study.solver.friction.PinFrictionError,
+                       match=r"t = 0.25 s: the friction torques of revolute joint\(s\) 'pin' did not converge in 1 "
+                             r"Newton iterations .* at q = \[ ?0\.3 .*, qd = \[-2\. "):
+        dyn.contact_solution(0.25, q, qd)
+
+
+def test_exudyn_model_refuses_pin_friction(mech):
+    pytest.importorskip("exudyn")
+    from study.exudyn_models.translate import build
+
+    q, qd = full_state(*START)
+    with pytest.raises(ValueError, match=r"does not implement friction in revolute joints \('pin' of "):
+        build(mech, q, qd, friction="regularized")
+
+
+def test_friction_none_ignores_the_pin_friction(mech):
+    r = study.simulate(mech, t_end=0.2, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP)
+    e = r.energies
+    assert abs(e["kinetic"][-1] + e["potential"][-1] - e["kinetic"][0] - e["potential"][0]) < 1e-6
+
+
+def test_description_errors(mech):
+    ps = mech.parameters
+    with pytest.raises(DescriptionError, match=r"joint 'pin': a revolute joint with friction is a cut joint"):
+        lower(describe(ps, cut=False))
+    with pytest.raises(DescriptionError, match=r"joint 'pin': friction on a revolute joint needs radius=r"):
+        lower(describe(ps, radius=False))
+    with pytest.raises(DescriptionError, match=r"'pin' has friction \(a cut joint"):
+        lower(describe(ps, relative=True))
+
+
+
+def test_pin_between_two_moving_bodies_dissipates_its_work():
+    """A double pendulum whose elbow (a cut joint with friction between two moving bars) is the only loss: the
+    torque acts on both bars, equal and opposite, so E(t) - E(0) is its work tau * omega_rel, which never grows."""
+    from study.model.compile import compile_description
+
+    v = dict(m1=1.0, I1=0.03, l1=0.3, m2=0.8, I2=0.02, l2=0.25, g=9.81, mu=0.3, r=0.05)
+    d = study.Description("pin_friction_double", ["th1", "th2", "x", "y"], v)
+    p = d.p
+    th1, th2, x, y = d.q
+    d.ground("O", 0, 0)
+    d.body("upper", p.m1, p.I1, {"top": (0, p.l1), "tip": (0, -p.l1)}, angle=th1)
+    d.body("lower", p.m2, p.I2, {"top": (0, p.l2)}, angle=th2, position=(x, y))
+    d.revolute("shoulder", (study.GROUND, "O"), ("upper", "top"))
+    d.revolute("elbow", ("upper", "tip"), ("lower", "top"), friction=study.Friction(p.mu, p.mu), radius=p.r)
+    d.gravity(p.g)
+    eom = compile_description(lower(d))
+    a1, a2, w2 = 0.8, -0.3, 4.0
+    q0 = np.array([a1, a2, 2 * v["l1"] * math.sin(a1) + v["l2"] * math.sin(a2),
+                   -2 * v["l1"] * math.cos(a1) - v["l2"] * math.cos(a2)])
+    qd0 = np.array([0.0, w2, v["l2"] * w2 * math.cos(a2), v["l2"] * w2 * math.sin(a2)])
+    r = study.simulate(eom, q0, qd0, t_end=1.0, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
+                       output_step=OUTPUT_STEP, friction="regularized", friction_eps=EPS)
+    e = r.energies
+    scale = tolerance("energy_drift_factor") * RTOL * e["kinetic"].max()
+    change = e["kinetic"] + e["potential"] - e["kinetic"][0] - e["potential"][0]
+    w = e["work_friction_elbow"]
+    residual = np.abs(change - w).max()
+    print(f"double pendulum: energy residual {residual:.3g} J (bound {scale:.3g}), elbow dissipated {-w[-1]:.4g} J")
+    assert residual <= scale
+    assert w[-1] < -0.05 and np.diff(w).max() <= scale
