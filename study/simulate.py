@@ -195,10 +195,6 @@ def simulate(
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, mech = resolve(eom_or_mechanism, variant)
-    pins = tuple(p.name for p in getattr(eom, "pin_frictions", ()))
-    if pins and friction == "exact":   # refused, never a silent fallback
-        raise ValueError(f"friction='exact' (stick/slip) is not implemented for revolute joints with friction "
-                         f"({', '.join(map(repr, pins))} of {eom.name!r}): use friction='regularized' or 'sign'")
     if backend == "compiled":
         check_no_pin_friction(eom, friction)
     ps = None if mech is None else mech.parameters

@@ -82,9 +82,6 @@ class Friction:
     resistance: Expr = sp.Integer(0)
 
 
-_SET_ONLY = {"canonical_if_set": True}   # a field left out of the fingerprint while None (added after the study began)
-
-
 @dataclass(frozen=True)
 class Revolute:
     """``friction`` with ``radius`` (the pin's radius r [m]): Coulomb pin friction, a torque
@@ -96,8 +93,8 @@ class Revolute:
     a: tuple[str, str]
     b: tuple[str, str]
     cut: bool | None = None
-    friction: Friction | None = dataclasses.field(default=None, metadata=_SET_ONLY)
-    radius: Expr | None = dataclasses.field(default=None, metadata=_SET_ONLY)
+    friction: Friction | None = None
+    radius: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -492,9 +489,7 @@ def _canonical(obj: Any) -> str:
     if isinstance(obj, (sp.Basic, sp.MatrixBase)):
         return sp.srepr(obj)
     if dataclasses.is_dataclass(obj):
-        kept = [f for f in dataclasses.fields(obj)
-                if not (f.metadata.get("canonical_if_set") and getattr(obj, f.name) is None)]
-        return type(obj).__name__ + _canonical({f.name: getattr(obj, f.name) for f in kept})
+        return type(obj).__name__ + _canonical({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
     if isinstance(obj, SimpleNamespace):
         obj = vars(obj)
     if isinstance(obj, dict):

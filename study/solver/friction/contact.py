@@ -130,7 +130,7 @@ class FrictionDynamics(Dynamics):
             raise ValueError(f"EquationsOfMotion {self.eom.name!r} has no sliding contacts and no revolute joints with "
                              f"friction: friction needs at least one")
         if pins and self.law.switched:
-            raise ValueError(f"friction {self.law.name!r} (stick/slip) is not implemented for revolute joints with "
+            raise ValueError(f"friction={self.law.name!r} (stick/slip) is not implemented for revolute joints with "
                              f"friction ({', '.join(repr(p.name) for p in pins)} of {self.eom.name!r}): use friction="
                              f"'regularized' or 'sign'")
         self._pins = pins
@@ -209,17 +209,6 @@ class FrictionDynamics(Dynamics):
         if not self._pins:
             return self._solve(t, M, Q, J, c, Jt, bt, v_t, stick, s)
         return self._solve_pins(t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s)
-
-    def pin_torques(self, t: float, q: Array, qd: Array, tau: Array) -> tuple[Array, Array, Array]:
-        """(g(tau), |R|_delta, R) of the revolute joints with friction for given trial torques ``tau`` (no sliding
-        contacts): the torques their friction law gives for the reaction that ``tau`` produces (for checks)."""
-        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, None, None, None)
-        P = np.array([np.asarray(p.rate_jacobian(q), dtype=float) for p in self._pins])
-        sol = self._solve(t, M, Q + P.T @ tau, J, c, Jt, bt, v_t, stick, s)
-        R = sol.lam[self._pin_rows]
-        norm = np.sqrt(np.sum(R ** 2, axis=1) + self._pin_delta ** 2)
-        slip = self.law.phases(None, P @ qd)[1]
-        return -(self._pin_coef * norm + self._pin_torque) * slip, norm, R
 
     def _solve_pins(self, t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s) -> ContactSolution:
         """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s(omega) = 0 around the contacts' solve."""
