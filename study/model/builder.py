@@ -84,14 +84,15 @@ class Contact:
 @dataclass(frozen=True)
 class PinFriction:
     """Coulomb friction of a revolute cut joint whose rows are ``rows`` (x, y: their multipliers are its reaction
-    R): a torque tau = -(mu r |R|_delta + torque) s(omega_rel) on ``body_a`` and -tau on ``body_b`` (None: ground),
-    omega_rel = theta_a' - theta_b'."""
+    R): a torque tau = -(mu_kinetic r |R|_delta + torque) s(omega_rel) on ``body_a`` and -tau on ``body_b`` (None:
+    ground), omega_rel = theta_a' - theta_b'; at rest it holds up to mu_static r |R|_delta + torque."""
 
     name: str
     rows: tuple[str, str]
     body_a: Body | None
     body_b: Body | None
-    mu: Expr
+    mu_static: Expr
+    mu_kinetic: Expr
     radius: Expr
     torque: Expr
 
@@ -191,10 +192,11 @@ class MechanismBuilder:
         self.contacts.append(c)
         return c
 
-    def pin_friction(self, name: str, rows, body_a: Body | None, body_b: Body | None, mu: Any, radius: Any,
-                     torque: Any = 0) -> PinFriction:
+    def pin_friction(self, name: str, rows, body_a: Body | None, body_b: Body | None, mu_static: Any,
+                     mu_kinetic: Any, radius: Any, torque: Any = 0) -> PinFriction:
         """Coulomb friction of a revolute joint whose two constraint rows (already added) are ``rows``."""
-        pin = PinFriction(name, tuple(rows), body_a, body_b, *(sp.sympify(v) for v in (mu, radius, torque)))
+        pin = PinFriction(name, tuple(rows), body_a, body_b,
+                          *(sp.sympify(v) for v in (mu_static, mu_kinetic, radius, torque)))
         self.pin_frictions.append(pin)
         return pin
 

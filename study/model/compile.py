@@ -204,14 +204,18 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
     pins = []
     for pin in b.pin_frictions:
         jacs = [None if body is None else f[f"angle_jac__{body.name}"] for body in (pin.body_a, pin.body_b)]
+        biases = [None if body is None else f[f"angle_bias__{body.name}"] for body in (pin.body_a, pin.body_b)]
 
         def rate_jacobian(q, ja=jacs[0], jb=jacs[1], m=len(b.q)):   # d(omega_a - omega_b)/dqd
             out = np.zeros(m) if ja is None else np.array(ja(q), dtype=float)
             return out if jb is None else out - jb(q)
 
+        def rate_bias(q, qd, ba=biases[0], bb=biases[1]):           # omega_rel' - rate_jacobian(q) @ qdd
+            return (0.0 if ba is None else float(ba(q, qd))) - (0.0 if bb is None else float(bb(q, qd)))
+
+        values = {k: float(getattr(pin, k).subs(subs)) for k in ("mu_static", "mu_kinetic", "radius", "torque")}
         pins.append(PinFriction(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
-                                rate_jacobian=rate_jacobian, mu=float(pin.mu.subs(subs)),
-                                radius=float(pin.radius.subs(subs)), torque=float(pin.torque.subs(subs))))
+                                rate_jacobian=rate_jacobian, rate_bias=rate_bias, **values))
 
     return EquationsOfMotion(
         n_coordinates=len(b.q),

@@ -226,7 +226,7 @@ def lower(d: Description, coordinates: str = "relative") -> MechanismBuilder:
                 fr = jnt.friction
                 b.pin_friction(jnt.name, [n for n, _ in rows], *(None if e[0] == GROUND else bodies[e[0]]
                                                                   for e in (jnt.a, jnt.b)),
-                               fr.mu_kinetic, jnt.radius, fr.resistance)
+                               fr.mu_static, fr.mu_kinetic, jnt.radius, fr.resistance)
     m, r = len(names), len(b.constraints)
     if r >= m:
         held = ", ".join(f"{n!r} ({_count(k, 'row')})" for n, k in counts if k)

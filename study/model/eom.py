@@ -61,21 +61,24 @@ class SlidingContact:
 class PinFriction:
     """Coulomb friction of a revolute joint whose reaction R is the multipliers of constraint rows ``rows`` (x, y).
 
-    The friction torque on the relative rotation is tau = -(mu radius |R|_delta + torque) s(omega_rel),
+    The friction torque on the relative rotation is tau = -(mu_kinetic radius |R|_delta + torque) s(omega_rel),
     omega_rel = rate_jacobian(q) @ qd, and its generalized force rate_jacobian(q) * tau (the torque on one body,
     minus it on the other). |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) (``pin_friction_norm_width`` in
-    reference/tolerances.toml).
+    reference/tolerances.toml). At rest the joint holds up to mu_static radius |R|_delta + torque (the exact
+    treatment); its relative angular acceleration is rate_jacobian(q) @ qdd + rate_bias(q, qd).
     """
 
     name: str
     rows: tuple[int, int]
     rate_jacobian: Callable[[Array], Array]
-    mu: float
+    rate_bias: Callable[[Array, Array], float]
+    mu_static: float
+    mu_kinetic: float
     radius: float
     torque: float = 0.0
 
     def __post_init__(self) -> None:
-        for key in ("mu", "radius", "torque"):
+        for key in ("mu_static", "mu_kinetic", "radius", "torque"):
             value = getattr(self, key)
             if not np.isfinite(value) or value < 0 or (key == "radius" and value == 0):
                 raise ValueError(f"pin {self.name!r}: {key} = {value!r} must be finite and "

@@ -73,9 +73,9 @@ class Body:
 class Friction:
     """Coulomb contact data of a prismatic joint: mu_s, mu_k and a constant resistance F [N].
 
-    On a revolute joint (``revolute(..., friction=Friction(mu, mu), radius=r)``) the same data is pin friction:
-    mu_kinetic is the pin's coefficient, ``resistance`` a constant friction torque T0 [N m] (mu_static is not used
-    by the treatments implemented for pins, 'regularized' and 'sign')."""
+    On a revolute joint (``revolute(..., friction=Friction(mu_s, mu_k), radius=r)``) the same data is pin friction:
+    mu_kinetic is the sliding pin's coefficient, mu_static bounds the torque that holds it at rest (the exact
+    treatment), ``resistance`` a constant friction torque T0 [N m]."""
 
     mu_static: Expr
     mu_kinetic: Expr

@@ -137,7 +137,7 @@ class FrictionDynamics(Dynamics):
         self._nc = len(self.eom.contacts)
         if pins:
             self._pin_rows = np.array([p.rows for p in pins], dtype=int)
-            self._pin_coef = np.array([p.mu * p.radius for p in pins])
+            self._pin_coef = np.array([p.mu_kinetic * p.radius for p in pins])
             self._pin_torque = np.array([p.torque for p in pins])
             delta = tolerance("pin_friction_norm_width") if self.pin_norm_width is None else self.pin_norm_width
             if not (np.isfinite(delta) and delta > 0):
