@@ -14,8 +14,9 @@ and the moment equation about O (R passes through O):
 
     (Ic + m l^2) th'' = -m g l sin th - (mu r |R|_delta + T0) s(th'),   |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2)
 
-R depends on th'', so th'' solves an implicit scalar equation: Newton below. s = tanh(. / eps) ('regularized') or
-sgn ('sign'). The pin's relative rate is omega_rel = theta_ground' - theta_bar' = -th' (the description's joint
+R depends on th'', so th'' solves an implicit scalar equation: Newton below. s = tanh(. / eps) ('regularized'),
+sgn ('sign') or, for the exact law, the direction of the slip phase, whose end th' = 0 the hand model locates itself
+(:func:`hand_exact`). The pin's relative rate is omega_rel = theta_ground' - theta_bar' = -th' (the description's joint
 runs from ground to the bar), and the torque on the bar is -tau = -(mu r |R|_delta + T0) s(th'): the same law.
 """
 
@@ -207,12 +208,77 @@ def test_sign_treatment_with_rk4_matches_the_hand_rk4(mech):
     assert dev <= tolerance("fast_fixed_step_agreement") * np.abs(hand[:, 0]).max()
 
 
-@pytest.mark.parametrize("options, what", [(dict(friction="exact"), "friction='exact' (stick/slip)"),
-                                           (dict(friction="regularized", backend="compiled"), "backend='compiled'")])
-def test_exact_and_compiled_are_refused_by_name(mech, options, what):
-    with pytest.raises(ValueError, match=rf"{re.escape(what)} is not implemented for revolute joints with friction "
-                                          rf"\('pin' of 'pin_friction_pendulum'\)"):
-        study.simulate(mech, t_end=0.1, **options)
+def hand_exact(t_end, v=VALUES, delta=DELTA):
+    """The exact stick/slip law in th: slip phases with the frozen direction d (s = d), each ended where th' = 0
+    (located by solve_ivp's event); at rest the pin holds if the torque that keeps th'' = 0, m g l sin th, is within
+    mu_s r |R|_delta + T0, where at rest and held R = (0, m g); else it slides where gravity pushes, d = -sgn(sin th).
+    Returns (t_stick or None, the slip segments' solutions)."""
+    m, l, g = v["m"], v["l"], v["g"]
+    capacity = v["mu"] * v["r"] * math.sqrt((m * g) ** 2 + delta ** 2) + v["T0"]
+    t, y, segments = 0.0, np.array(START, dtype=float), []
+    while t < t_end:
+        if abs(m * g * l * math.sin(y[0])) <= capacity:
+            return t, segments
+        d = -math.copysign(1.0, math.sin(y[0]))
+        stop = lambda t, y, d: y[1]    # noqa: E731
+        stop.terminal, stop.direction = True, -d   # th' returns to 0 (not its start at 0)
+        sol = solve_ivp(lambda t, y, d: [y[1], hand_accel(y[0], y[1], d)[0]], (t, t_end), y, args=(d,),
+                        method="DOP853", rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"),
+                        events=stop, dense_output=True)
+        assert sol.success
+        segments.append(sol)
+        if sol.status == 0:
+            return None, segments
+        t, y = float(sol.t_events[0][0]), np.array([sol.y_events[0][0][0], 0.0])
+    return None, segments
+
+
+T_EXACT = 4.0     # the pendulum comes to rest after five swings, near 3.55 s
+
+
+@pytest.fixture(scope="module")
+def exact(mech):
+    return study.simulate(mech, t_end=T_EXACT, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
+                          output_step=OUTPUT_STEP, friction="exact")
+
+
+def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact):
+    """Stick time and motion against the hand model; the stuck pin's torque within its static limit."""
+    r = exact
+    t_stick, segments = hand_exact(T_EXACT)
+    assert t_stick is not None and len(segments) >= 4
+    stops = [tr for tr in r.stats["friction_transitions"] if tr.get("contact") == "pin" and tr["to"] == "stick"]
+    print(f"exact pin: hand stick at {t_stick:.9f} s after {len(segments)} slip phases; study: "
+          f"{[round(s['t'], 9) for s in stops]}")
+    assert len(stops) == 1
+    # the located stop is an event of the adaptive run: its time error follows the motion's (global) error
+    assert abs(stops[0]["t"] - t_stick) <= tolerance("adaptive_global_error_factor") * RTOL * T_EXACT
+    moving = r.t < t_stick
+    hand = np.array([next(seg for seg in segments if t <= seg.t[-1]).sol(t)[0] for t in r.t[moving]])
+    dev = np.abs(r.q[moving, 0] - hand).max()
+    bound = tolerance("adaptive_global_error_factor") * RTOL * np.abs(hand).max()
+    print(f"exact pin vs hand model: max |d th| = {dev:.3g} rad (bound {bound:.3g})")
+    assert dev <= bound
+    held = r.t > stops[0]["t"]
+    assert np.all(r.forces["stick_pin"][held] == 1.0) and np.ptp(r.q[held, 0]) <= bound
+    need = np.abs(r.forces["friction_pin"][held])
+    limit = VALUES["mu"] * VALUES["r"] * np.sqrt(r.forces["normal_pin"][held] ** 2 + DELTA ** 2) + VALUES["T0"]
+    hold = VALUES["m"] * VALUES["g"] * VALUES["l"] * np.abs(np.sin(r.q[held, 0]))   # the hand model's, at rest
+    print(f"stuck pin: torque {need.max():.6g} N m (hand {hold.max():.6g}), limit {limit.max():.6g} N m")
+    assert np.all(need <= limit) and np.abs(need - hold).max() <= 1e-9 * hold.max() and hold.min() > 0.1
+
+
+def test_exact_pin_energy_balance(exact):
+    scale = tolerance("energy_drift_factor") * RTOL * exact.energies["kinetic"].max()
+    residual = np.abs(balance_residual(exact)).max()
+    print(f"exact pin: energy balance residual {residual:.3g} J (bound {scale:.3g})")
+    assert residual <= scale
+
+
+def test_compiled_is_refused_by_name(mech):
+    with pytest.raises(ValueError, match=r"backend='compiled' is not implemented for revolute joints with friction "
+                                         r"\('pin' of 'pin_friction_pendulum'\)"):
+        study.simulate(mech, t_end=0.1, friction="regularized", backend="compiled")
 
 
 def test_compiled_entry_points_refuse_pin_friction(mech):

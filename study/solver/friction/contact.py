@@ -26,13 +26,20 @@ Exactly one consistent solution is used. None, or two that differ, is Painleve's
 silently. The treatments of sgn are in :mod:`study.solver.friction.laws`.
 
 Revolute joints with friction (:class:`study.model.PinFriction`, cut joints whose reaction R_p is the multipliers
-of their two rows) add a torque tau_p = -(mu_p r_p |R_p|_delta + T0_p) s(omega_p) on the relative rotation,
-generalized force P_p^T tau_p (P_p = d omega_p / d qd). R depends on tau affinely (R = R_0 + L tau, L the
-joints' unit-torque responses) and tau on |R|: the small nonlinear system tau = g(tau) is solved by Newton
-(``pin_friction_solve_rtol``), around the contacts' solve above, which is repeated at every iterate. s is the
-treatment's slip factor of omega [rad/s] ('regularized', 'sign'; its width friction_eps read in rad/s); 'exact'
-stick/slip of a pin is not implemented and refused. The pins follow the contacts in every per-contact output
-(``normal_<pin>`` = |R| [N], ``friction_<pin>`` = tau [N m], ``work_friction_<pin>`` = its work).
+of their two rows) add a torque on the relative rotation omega_p = P_p qd (P_p = d omega_p / d qd), generalized
+force P_p^T tau_p:
+
+    slip (slip factor s_p):  tau_p = -(mu_k,p r_p |R_p|_delta + T0_p) s_p,   |R|_delta = sqrt(|R|^2 + delta^2)
+    stick:                   P_p qdd + rate_bias_p = 0 (omega_p stays 0), tau_p its multiplier
+
+A stuck pin is one more constraint row, appended after the others, whose multiplier is -tau_p. R depends on the
+sliding pins' tau affinely (R = R_0 + L tau, L their unit-torque responses) and tau on |R|: the small nonlinear
+system tau = g(tau) is solved by Newton (``pin_friction_solve_rtol``), around the contacts' solve above, which is
+repeated at every iterate. s_p is the treatment's slip factor of omega_p [rad/s] ('regularized', 'sign'; the width
+friction_eps read in rad/s) or the mode's frozen direction ('exact'). A stuck pin holds while |tau_p| <=
+mu_s,p r_p |R_p|_delta + c T0_p (c as for a contact's resistance, ``RESISTANCE_READINGS``). The pins follow the
+contacts in every per-contact output and in the exact treatment's mode (``normal_<pin>`` = |R| [N],
+``friction_<pin>`` = tau [N m], ``v_t`` = omega [rad/s], ``work_friction_<pin>`` = its work).
 """
 
 from __future__ import annotations
@@ -112,9 +119,9 @@ class FrictionDynamics(Dynamics):
     """:class:`Dynamics` with Coulomb friction at every contact of the equations of motion.
 
     State y = [q, qd, W_applied, W_friction]: the last block is the work of each contact's
-    tangential force, dW_j/dt = f_j v_t,j. The mode passed to :meth:`rhs` is the loads' mode
-    (``n_load_modes`` entries) followed, for the exact treatment, by two entries per contact:
-    (+1 stick / -1 slip, sliding direction +-1).
+    tangential force, dW_j/dt = f_j v_t,j (a pin's: tau_p omega_p). The mode passed to :meth:`rhs` is the
+    loads' mode (``n_load_modes`` entries) followed, for the exact treatment, by two entries per contact and
+    then per pin: (+1 stick / -1 slip, sliding direction +-1).
     """
 
     law: ExactCoulomb | RegularizedCoulomb | PlainSign | None = None
@@ -129,10 +136,6 @@ class FrictionDynamics(Dynamics):
         if not self.eom.contacts and not pins:
             raise ValueError(f"EquationsOfMotion {self.eom.name!r} has no sliding contacts and no revolute joints with "
                              f"friction: friction needs at least one")
-        if pins and self.law.switched:
-            raise ValueError(f"friction={self.law.name!r} (stick/slip) is not implemented for revolute joints with "
-                             f"friction ({', '.join(repr(p.name) for p in pins)} of {self.eom.name!r}): use friction="
-                             f"'regularized' or 'sign'")
         self._pins = pins
         self._nc = len(self.eom.contacts)
         if pins:
@@ -148,12 +151,27 @@ class FrictionDynamics(Dynamics):
         self._mu_k = np.array([c.mu_kinetic for c in self.eom.contacts])
         self._mu_s = np.array([c.mu_static for c in self.eom.contacts])
         self._resistance = np.array([c.resistance for c in self.eom.contacts])
-        # the part of R that holds a stuck contact (the exact law's reading; no static limit otherwise)
-        self._static_resistance = self._resistance * getattr(self.law, "static_resistance_fraction", 1.0)
+        # static limit per entry (contacts, then pins): the part of R (T0) that holds (the exact law's reading) plus
+        # mu_s |N| (mu_s r |R|_delta)
+        fraction = getattr(self.law, "static_resistance_fraction", 1.0)
+        self._static_resistance = fraction * np.concatenate([self._resistance, [p.torque for p in pins]])
+        self._static_coef = np.concatenate([self._mu_s, [p.mu_static * p.radius for p in pins]])
 
     def static_limit(self, normal: Array) -> Array:
-        """Largest tangential force each contact can supply at rest: c R + mu_s |N| [N] (see ``RESISTANCE_READINGS``)."""
-        return self._static_resistance + self._mu_s * np.abs(np.asarray(normal, dtype=float))
+        """Largest force (torque) each contact (pin) can supply at rest: c R + mu_s |N| [N] for a contact,
+        c T0 + mu_s r |R|_delta [N m] for a pin (``normal``: the per-entry outputs; see ``RESISTANCE_READINGS``)."""
+        n = np.abs(np.asarray(normal, dtype=float))
+        n[self._nc:] = np.sqrt(n[self._nc:] ** 2 + (self._pin_delta ** 2 if self._pins else 0.0))
+        return self._static_resistance + self._static_coef * n
+
+    def rate_rows(self, q: Array, qd: Array) -> tuple[Array, Array]:
+        """(A (n, m), b (n,)): each entry's velocity A_j qd and rate A_j qdd + b_j, contacts (J_t, tangent bias)
+        then pins (P, rate_bias)."""
+        rows = [np.asarray(c.tangent_jacobian(q), dtype=float) for c in self.eom.contacts]
+        rows += [np.asarray(p.rate_jacobian(q), dtype=float) for p in self._pins]
+        bias = [float(c.tangent_bias(q, qd)) for c in self.eom.contacts]
+        bias += [float(p.rate_bias(q, qd)) for p in self._pins]
+        return np.array(rows).reshape(len(rows), q.size), np.array(bias)
 
     @property
     def contact_names(self) -> tuple[str, ...]:
@@ -174,73 +192,86 @@ class FrictionDynamics(Dynamics):
         """(stick flags, slip factors s) of the contacts in ``mode`` at tangential velocities ``v_t``."""
         nc = self._nc
         entries = None
+        entries = None
         if self.law.switched:
-            if mode is None or len(mode) != self.n_load_modes + 2 * nc:
+            n = self.n_contacts
+            if mode is None or len(mode) != self.n_load_modes + 2 * n:
                 raise ValueError(f"the exact friction treatment needs a mode with {self.n_load_modes} load entries and "
-                                 f"2 per contact ({nc} contacts); got {mode!r}")
-            entries = np.asarray(mode[self.n_load_modes:], dtype=float).reshape(nc, 2)
+                                 f"2 per contact and pin ({n}); got {mode!r}")
+            entries = np.asarray(mode[self.n_load_modes:], dtype=float).reshape(n, 2)
         return self.law.phases(entries, v_t)
 
     def _setup(self, t, q, qd, mode, stick, s):
         eom = self.eom
         J = self._phi_q(t, q)
         c = eom.gamma(q, qd) + self.stabilization.bias(eom.phi(q), J @ qd)
-        Jt = np.array([np.asarray(ct.tangent_jacobian(q), dtype=float) for ct in eom.contacts])
-        bt = np.array([float(ct.tangent_bias(q, qd)) for ct in eom.contacts])
-        if not self._nc:
-            Jt = np.zeros((0, q.size))
-        v_t = Jt @ qd
+        A, b = self.rate_rows(q, qd)
+        v = A @ qd
         if stick is None or s is None:
-            stick_m, s_m = self.phases(mode, v_t)
+            stick_m, s_m = self.phases(mode, v)
             stick = stick_m if stick is None else stick
             s = s_m if s is None else s
         stick = np.asarray(stick, dtype=bool)
         s = np.where(stick, 0.0, np.asarray(s, dtype=float))
         M, Q = self._mass(t, q), self._forces(t, q, qd, self.load_mode(mode))
-        return M, Q, J, c, Jt, bt, v_t, stick, s
+        return M, Q, J, c, A, b, v, stick, s
 
     def contact_solution(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> ContactSolution:
         """Solve the coupled friction problem at one state.
 
-        ``stick`` and ``s`` (one entry per contact) override the phases implied by ``mode``.
-        Raises :class:`PainleveError` unless exactly one normal-force sign hypothesis is consistent.
+        ``stick`` and ``s`` (one entry per contact, then per pin) override the phases implied by ``mode``.
+        Raises :class:`PainleveError` unless exactly one normal-force sign hypothesis is consistent, or if
+        holding the stuck entries is a singular problem (``singular``).
         """
-        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, mode, stick, s)
+        M, Q, J, c, A, b, v, stick, s = self._setup(t, q, qd, mode, stick, s)
+        nc = self._nc
         if not self._pins:
-            return self._solve(t, M, Q, J, c, Jt, bt, v_t, stick, s)
-        return self._solve_pins(t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s)
+            return self._solve(t, M, Q, J, c, A, b, v, stick, s)
+        return self._solve_pins(t, q, qd, M, Q, J, c, A[:nc], b[:nc], v, stick, s, A[nc:], b[nc:])
 
-    def _solve_pins(self, t, q, qd, M, Q, J, c, Jt, bt, v_t, stick, s) -> ContactSolution:
-        """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s(omega) = 0 around the contacts' solve."""
-        pins, rows = self._pins, self._pin_rows
-        P = np.array([np.asarray(p.rate_jacobian(q), dtype=float) for p in pins])   # (np, m)
-        omega = P @ qd
-        slip = np.asarray(self.law.phases(None, omega)[1], dtype=float)
-        r = J.shape[0]
-        L = np.array([self.accelerations.solve(M, P[i], J, np.zeros(r))[1] for i in range(len(pins))])  # (np, r)
-        dR = L[:, rows]                        # dR[j, i, :]: reaction of pin i per unit torque at pin j
-        tau = np.zeros(len(pins))
+    def _solve_pins(self, t, q, qd, M, Q, J, c, Jt, bt, v, stick, s, P, pb) -> ContactSolution:
+        """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s = 0 of the sliding pins around the contacts' solve,
+        the stuck pins' locks appended to the constraints."""
+        nc, pins, rows, r = self._nc, self._pins, self._pin_rows, J.shape[0]
+        held, slip = stick[nc:], s[nc:]
+        free = ~held
+        if held.any():
+            J, c = np.vstack([J, P[held]]), np.concatenate([c, -pb[held]])
+        Pf = P[free]
+        try:   # the unit-torque responses of the free pins' reactions: dR[j, i, :] = dR_i / dtau_j
+            dR = np.array([self.accelerations.solve(M, row, J, np.zeros(J.shape[0]))[1] for row in Pf])
+        except np.linalg.LinAlgError:
+            self._singular_hold(t, held)
+        dR = dR.reshape(len(Pf), J.shape[0])[:, rows][:, free]
+        coef, torque = self._pin_coef[free], self._pin_torque[free]
+        tau_f = np.zeros(len(Pf))
         history = []
         for _ in range(PIN_MAX_ITERATIONS):
-            sol = self._solve(t, M, Q + P.T @ tau, J, c, Jt, bt, v_t, stick, s)
+            try:
+                sol = self._solve(t, M, Q + Pf.T @ tau_f, J, c, Jt, bt, v[:nc], stick[:nc], s[:nc])
+            except np.linalg.LinAlgError:
+                self._singular_hold(t, held)
             R = sol.lam[rows]                  # (np, 2)
             norm = np.sqrt(np.sum(R ** 2, axis=1) + self._pin_delta ** 2)
-            level = self._pin_coef * norm + self._pin_torque
-            F = tau + level * slip
-            history.append(float(np.max(np.abs(F))))
-            if np.all(np.abs(F) <= self._pin_rtol * np.maximum(level, np.abs(tau))):
-                return ContactSolution(sol.qdd, sol.lam, np.concatenate([sol.normal, np.sqrt(np.sum(R ** 2, axis=1))]),
-                                       np.concatenate([sol.friction, tau]), np.concatenate([sol.v_t, omega]),
-                                       np.concatenate([sol.stick, np.zeros(len(pins), dtype=bool)]),
-                                       np.concatenate([sol.margin, np.full(len(pins), np.nan)]))
-            jac = np.eye(len(pins)) + (self._pin_coef * slip / norm)[:, None] * np.einsum("ik,jik->ij", R, dR)
+            level = coef * norm[free] + torque
+            F = tau_f + level * slip[free]
+            history.append(float(np.max(np.abs(F), initial=0.0)))
+            if np.all(np.abs(F) <= self._pin_rtol * np.maximum(level, np.abs(tau_f))):
+                tau = np.zeros(len(pins))
+                tau[free], tau[held] = tau_f, -sol.lam[r:]
+                normal = np.concatenate([sol.normal, np.sqrt(np.sum(R ** 2, axis=1))])
+                margin = np.where(stick, self.static_limit(normal) - np.abs(np.concatenate([sol.friction, tau])),
+                                  np.nan)
+                return ContactSolution(sol.qdd, sol.lam[:r], normal, np.concatenate([sol.friction, tau]), v,
+                                       stick.copy(), margin)
+            jac = np.eye(len(Pf)) + (coef * slip[free] / norm[free])[:, None] * np.einsum("ik,jik->ij", R[free], dR)
             try:
                 step = np.linalg.solve(jac, F)
             except np.linalg.LinAlgError:
                 break
             if not np.all(np.isfinite(step)):
                 break
-            tau = tau - step
+            tau_f = tau_f - step
         names = tuple(p.name for p in pins)
         raise PinFrictionError(
             f"t = {t:.9g} s: the friction torques of revolute joint(s) {', '.join(map(repr, names))} did not converge "
@@ -254,8 +285,9 @@ class FrictionDynamics(Dynamics):
     def hypotheses(self, t: float, q: Array, qd: Array, mode=None, stick=None, s=None) -> list[dict]:
         """Every normal-force sign hypothesis at one state: dicts with sigma ({contact index: +-1}),
         f, qdd, lam, normal, tol and consistent (for checks and error messages)."""
-        M, Q, J, c, Jt, bt, v_t, stick, s = self._setup(t, q, qd, mode, stick, s)
-        return list(self._hypotheses(M, Q, J, c, Jt, bt, stick, s))
+        M, Q, J, c, A, b, _, stick, s = self._setup(t, q, qd, mode, stick, s)
+        nc = self._nc
+        return list(self._hypotheses(M, Q, J, c, A[:nc], b[:nc], stick[:nc], s[:nc]))
 
     def _hypotheses(self, M, Q, J, c, Jt, bt, stick, s):
         """Yield dicts (sigma, f, qdd, lam, normal, tol, consistent) for each sign hypothesis."""
@@ -314,8 +346,14 @@ class FrictionDynamics(Dynamics):
             self._painleve(t, hyps, len(good))
         N = chosen["normal"]
         f = chosen["f"]
-        margin = np.where(stick, self.static_limit(N) - np.abs(f), np.nan)
+        margin = np.where(stick, self._static_resistance[:self._nc] + self._mu_s * np.abs(N) - np.abs(f), np.nan)
         return ContactSolution(chosen["qdd"], chosen["lam"], N, f, v_t, stick.copy(), margin)
+
+    def _singular_hold(self, t, held):
+        names = tuple(p.name for p, h in zip(self._pins, held) if h)
+        raise PainleveError(f"t = {t:.9g} s: the stick problem of pin(s) {', '.join(map(repr, names))} is singular "
+                            f"(the other constraints lock their relative rotation)", names, float(t),
+                            tuple(p.mu_static for p, h in zip(self._pins, held) if h), 0, singular=True)
 
     def _painleve(self, t, hyps, n_good):
         assumed = sorted(hyps[0]["sigma"])

@@ -20,9 +20,10 @@ class FrictionLawError(SimulationError):
 class StickSlipSwitching:
     """Switching rule for :func:`study.solver.integrate.integrate` (its ``switching=``).
 
-    Mode = (load entries..., then per contact: e_stick, e_dir). e_stick = +1 in stick, -1 in slip;
-    e_dir = the frozen sliding direction (+-1; kept, unused, in stick). Indicators, whose signs equal
-    the mode entries while the mode holds:
+    Mode = (load entries..., then per contact, then per pin with friction: e_stick, e_dir). e_stick = +1
+    in stick, -1 in slip; e_dir = the frozen sliding direction (+-1; kept, unused, in stick). Indicators,
+    whose signs equal the mode entries while the mode holds (a pin's v_t is its relative rotation rate
+    omega, its f the torque tau, its static limit c T0 + mu_s r |R|_delta):
 
     - e_stick in slip:  -e_dir v_t       (crosses zero when the contact comes to rest)
     - e_stick in stick: c R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
@@ -47,11 +48,16 @@ class StickSlipSwitching:
     def _entry(self, j: int) -> int:
         return self.dyn.n_load_modes + 2 * j
 
+    def _rates(self, q, qd, qdd=None) -> Array:
+        """Each entry's velocity (v_t, omega), or with ``qdd`` its rate of change."""
+        A, b = self.dyn.rate_rows(q, qd)
+        return A @ qd if qdd is None else A @ qdd + b
+
     def initial_mode(self, t0: float, y0: Array) -> tuple:
         dyn, eom = self.dyn, self.dyn.eom
         q, qd = self._state(y0)
         nc = dyn.n_contacts
-        v_t = np.array([ct.tangent_jacobian(q) @ qd for ct in eom.contacts])
+        v_t = self._rates(q, qd)
         friction = []
         for j in range(nc):
             friction += [-1, int(np.sign(v_t[j])) or 1]
@@ -75,11 +81,11 @@ class StickSlipSwitching:
         return mode
 
     def describe(self, mode) -> dict:
-        """{contact: 'stick' | 'slip+' | 'slip-'} for a mode."""
+        """{contact or pin: 'stick' | 'slip+' | 'slip-'} for a mode."""
         out = {}
-        for j, ct in enumerate(self.dyn.eom.contacts):
+        for j, name in enumerate(self.dyn.contact_names):
             e = self._entry(j)
-            out[ct.name] = "stick" if mode[e] > 0 else ("slip+" if mode[e + 1] > 0 else "slip-")
+            out[name] = "stick" if mode[e] > 0 else ("slip+" if mode[e + 1] > 0 else "slip-")
         return out
 
     def indicators(self, t: float, y: Array, mode) -> Array:
@@ -88,12 +94,13 @@ class StickSlipSwitching:
         values = list(np.asarray(eom.indicators(t, q, qd), dtype=float)) if dyn.n_load_modes else []
         stick, _ = dyn.phases(mode, None)
         sol = dyn.contact_solution(t, q, qd, mode) if stick.any() else None
-        for j, ct in enumerate(eom.contacts):
+        v = self._rates(q, qd)
+        for j in range(dyn.n_contacts):
             direction = float(mode[self._entry(j) + 1])
             if stick[j]:
                 values += [sol.margin[j], direction]
             else:
-                values += [-direction * float(ct.tangent_jacobian(q) @ qd), direction]
+                values += [-direction * float(v[j]), direction]
         return np.asarray(values)
 
     def _free_direction(self, t, q, qd, mode, j) -> int:
@@ -109,8 +116,7 @@ class StickSlipSwitching:
         stick, s = stick.copy(), s.copy()
         stick[j], s[j] = False, 0.0
         free = dyn.contact_solution(t, q, qd, mode, stick=stick, s=s)
-        ct = dyn.eom.contacts[j]
-        a_t = float(ct.tangent_jacobian(q) @ free.qdd + ct.tangent_bias(q, qd))
+        a_t = float(self._rates(q, qd, free.qdd)[j])
         return 1 if a_t >= 0 else -1
 
     def _held(self, t, q, qd, mode, j):
@@ -153,25 +159,26 @@ class StickSlipSwitching:
         after every restart at the same instant, forever (the Zeno limit of those restarts is a contact
         held by the kinetic force, i.e. the reading 'holds').
         """
-        dyn, ct = self.dyn, self.dyn.eom.contacts[j]
+        dyn, name = self.dyn, self.dyn.contact_names[j]
         slide = dyn.contact_solution(t, q, qd, new)
         d = new[self._entry(j) + 1]
-        a_t = float(ct.tangent_jacobian(q) @ slide.qdd + ct.tangent_bias(q, qd))
-        scale = float(np.abs(ct.tangent_jacobian(q) @ held.qdd).max() + abs(ct.tangent_bias(q, qd)))
+        A, b = dyn.rate_rows(q, qd)
+        a_t = float(A[j] @ slide.qdd + b[j])
+        scale = float(abs(A[j] @ held.qdd) + abs(b[j]))
         if d * a_t >= -CONSISTENCY_RTOL * max(scale, abs(a_t)):
             return
         kinetic = float(abs(slide.friction[j]))
         raise FrictionLawError(
-            f"contact {ct.name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
+            f"contact {name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
             f"|f_req| = {abs(float(held.friction[j])):.6g} N, above its static limit {float(dyn.static_limit(held.normal)[j]):.6g} N "
             f"(resistance_reading {dyn.law.resistance_reading!r}), but sliding {'+' if d > 0 else '-'} meets the kinetic "
             f"force {kinetic:.6g} N (R + mu_k |N|), which decelerates it (a_t = {a_t:.3g} m/s^2 against the sliding "
             f"direction). A static limit below the kinetic resistance makes the law inconsistent here; use "
             f"resistance_reading 'holds' (the contact stays at rest, held by R + mu_s |N|) or a regularized law",
-            t=float(t), quantity="friction", contact=ct.name)
+            t=float(t), quantity="friction", contact=name)
 
     def _log(self, t, j, was, new, held):
-        dyn, name = self.dyn, self.dyn.eom.contacts[j].name
+        dyn, name = self.dyn, self.dyn.contact_names[j]
         entry = {"t": float(t), "contact": name, "from": was, "to": self.describe(new)[name]}
         if held is None:  # holding the contact is a singular problem: it is kinematically locked
             entry.update({"f_required": float("inf"), "normal": float("nan"), "limit": float("nan")})
@@ -206,10 +213,10 @@ class StickSlipSwitching:
             return tuple(new)
         j, which = divmod(i - dyn.n_load_modes, 2)
         if which == 1:
-            raise RuntimeError(f"direction entry of contact {dyn.eom.contacts[j].name!r} crossed zero; its indicator is constant")
+            raise RuntimeError(f"direction entry of contact {dyn.contact_names[j]!r} crossed zero; its indicator is constant")
         q, qd = self._state(y)
         e = self._entry(j)
-        was = self.describe(mode)[dyn.eom.contacts[j].name]
+        was = self.describe(mode)[dyn.contact_names[j]]
         if mode[e] < 0:  # sliding contact came to rest: stick or slide on
             return self._rest_decision(t, q, qd, mode, j, was=was)
         # stuck contact reached its static limit: slip where the loads push (against f_req)
