@@ -19,7 +19,9 @@ M, J, K, C, L0, G = 2.0, 0.05, 400.0, 3.0, 0.5, 9.81
 RTOL = 1e-10
 
 
-def _parameters(tmp_path, name: str, values: dict, q, qd, independent) -> study.ParameterSet:
+def parameter_set(tmp_path, name: str, values: dict, q, qd, independent) -> study.ParameterSet:
+    """A test mechanism's parameter file (values, printed q(0), qd(0), the independent coordinates' start), written
+    to ``tmp_path`` and loaded."""
     lines = [f'[meta]\nmechanism = "{name}"\npaper = "none: a test mechanism"\ndescription = "test"\n']
     for k, v in values.items():
         lines.append(f'[parameters.{k}]\nvalue = {v!r}\nunit = "-"\nsource = "test"\nrule = "positive"\n'
@@ -48,7 +50,7 @@ def hanging_mass(ps) -> study.Description:
 
 def test_free_body_on_a_spring_damper_is_the_damped_oscillator(tmp_path):
     y0, v0 = -0.8, 0.3
-    ps = _parameters(tmp_path, "hanging_mass", dict(m=M, J=J, k=K, c=C, L=L0, g=G), [0.0, y0, 0.0], [0.0, v0, 0.0],
+    ps = parameter_set(tmp_path, "hanging_mass", dict(m=M, J=J, k=K, c=C, L=L0, g=G), [0.0, y0, 0.0], [0.0, v0, 0.0],
                      [0, 1, 2])
     mech = study.Mechanism(hanging_mass(ps), ps)
     assert mech.equations().n_constraints == 0
@@ -87,7 +89,7 @@ def floating_frame(ps) -> study.Description:
 def frame_validation(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("frame")
     values = dict(mf=3.0, Jf=0.2, w=1.0, k=300.0, c=2.0, L=0.5, mp=1.0, lp=0.6, g=G)
-    ps = _parameters(tmp, "floating_frame", values, [0.0, 0.3, 0.05, -1.0], [0.1, 0.0, 0.0, 2.0], [0, 1, 2, 3])
+    ps = parameter_set(tmp, "floating_frame", values, [0.0, 0.3, 0.05, -1.0], [0.1, 0.0, 0.0, 2.0], [0, 1, 2, 3])
     mech = study.Mechanism(floating_frame(ps), ps)
     return mech, study.validate(mech, study.ValidationSettings(t_end=0.5), tmp / "report", say=lambda _: None)
 
@@ -147,7 +149,7 @@ def cartesian_pendulum_description(ps) -> study.Description:
 @pytest.fixture(scope="module")
 def pendulum(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("pendulum")
-    ps = _parameters(tmp, "cartesian_pendulum", dict(m=1.0, L=1.0, g=G), [0.6, -0.8], [0.8, 0.6], [0])
+    ps = parameter_set(tmp, "cartesian_pendulum", dict(m=1.0, L=1.0, g=G), [0.6, -0.8], [0.8, 0.6], [0])
     return study.Mechanism(cartesian_pendulum_description(ps), ps)
 
 

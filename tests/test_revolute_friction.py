@@ -34,6 +34,7 @@ import study.solver.friction.contact as contact
 from study.model.coordinates import lower
 from study.model.joints import DescriptionError
 from study.reference_data import tolerance
+from test_free_bodies import parameter_set
 
 VALUES = dict(m=1.5, Ic=0.05, l=0.4, g=9.81, mu=0.3, r=0.1, T0=0.05)
 START = (1.0, 0.0)        # th, th': released from rest at 1 rad
@@ -62,20 +63,54 @@ def full_state(th, w, l=VALUES["l"]):
     return q, np.array([w, l * w * math.cos(th), l * w * math.sin(th)])
 
 
+def pendulum(tmp_path, th: float, w: float) -> study.Mechanism:
+    """The pendulum of the module docstring with VALUES, started at th [rad], th' = w [rad/s]."""
+    q, qd = full_state(th, w)
+    ps = parameter_set(tmp_path, "pin_friction_pendulum", VALUES, q, qd, [0])
+    return study.Mechanism(describe(ps), ps)
+
+
+#: The double pendulum of test_pin_between_two_moving_bodies_dissipates_its_work: bar 'upper' (mass m1, centroidal
+#: inertia I1, half length l1) on the ground pin 'shoulder' at its point (0, l1), bar 'lower' (m2, I2, l2) on the pin
+#: 'elbow' at the upper's tip (0, -l1) with its point (0, l2); the elbow has pin friction (mu, radius r).
+DOUBLE = dict(m1=1.0, I1=0.03, l1=0.3, m2=0.8, I2=0.02, l2=0.25, g=9.81, mu=0.3, r=0.05)
+
+
+def describe_double(values, shoulder_friction: bool = False) -> study.Description:
+    """The double pendulum, q = (th1, th2, x, y) with (x, y) the lower bar's centre; with ``shoulder_friction`` the
+    shoulder has the same pin friction and the upper bar is a free body too (its centre (x1, y1) appended to q)."""
+    coords = ["th1", "th2", "x", "y"] + (["x1", "y1"] if shoulder_friction else [])
+    d = study.Description("pin_friction_double", coords, dict(values))
+    p = d.p
+    th1, th2, x, y = d.q[:4]
+    d.ground("O", 0, 0)
+    d.body("upper", p.m1, p.I1, {"top": (0, p.l1), "tip": (0, -p.l1)}, angle=th1,
+           position=(d.q[4], d.q[5]) if shoulder_friction else None)
+    d.body("lower", p.m2, p.I2, {"top": (0, p.l2)}, angle=th2, position=(x, y))
+    if shoulder_friction:
+        d.revolute("shoulder", (study.GROUND, "O"), ("upper", "top"), friction=study.Friction(p.mu, p.mu), radius=p.r)
+    else:
+        d.revolute("shoulder", (study.GROUND, "O"), ("upper", "top"))
+    d.revolute("elbow", ("upper", "tip"), ("lower", "top"), friction=study.Friction(p.mu, p.mu), radius=p.r)
+    d.gravity(p.g)
+    return d
+
+
+def double_state(values, a1: float, a2: float, w1: float, w2: float, shoulder_friction: bool = False):
+    """(q, qd) of :func:`describe_double` at the bar angles a1, a2 and rates w1, w2."""
+    l1, l2 = values["l1"], values["l2"]
+    q = [a1, a2, 2 * l1 * math.sin(a1) + l2 * math.sin(a2), -2 * l1 * math.cos(a1) - l2 * math.cos(a2)]
+    qd = [w1, w2, 2 * l1 * w1 * math.cos(a1) + l2 * w2 * math.cos(a2),
+          2 * l1 * w1 * math.sin(a1) + l2 * w2 * math.sin(a2)]
+    if shoulder_friction:
+        q += [l1 * math.sin(a1), -l1 * math.cos(a1)]
+        qd += [l1 * w1 * math.cos(a1), l1 * w1 * math.sin(a1)]
+    return np.array(q), np.array(qd)
+
+
 @pytest.fixture(scope="module")
 def mech(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("pin")
-    q, qd = full_state(*START)
-    lines = ['[meta]\nmechanism = "pin_friction_pendulum"\npaper = "none: a test mechanism"\ndescription = "test"\n']
-    for k, v in VALUES.items():
-        lines.append(f'[parameters.{k}]\nvalue = {v!r}\nunit = "-"\nsource = "test"\nrule = "positive"\ndoc = "{k}"\n')
-    lines.append(f'[initial_conditions.printed]\nq = {q.tolist()}\nqd = {qd.tolist()}\nsource = "test"\n')
-    lines.append(f"[initial_conditions.consistent]\nindependent = [0]\nq_independent = {q[:1].tolist()}\n"
-                 f'qd_independent = {qd[:1].tolist()}\nbranch = "none"\nsource = "test"\n')
-    lines.append('[variants.seed]\nnote = "test"\n')
-    (tmp / "pin_friction_pendulum.toml").write_text("\n".join(lines))
-    ps = study.load_parameters("pin_friction_pendulum", reference_dir=tmp)
-    return study.Mechanism(describe(ps), ps)
+    return pendulum(tmp_path_factory.mktemp("pin"), *START)
 
 
 # --- the hand model ------------------------------------------------------------------------------------
@@ -308,15 +343,6 @@ def test_unconverged_torque_solve_names_joint_time_and_state(mech, monkeypatch):
         dyn.contact_solution(0.25, q, qd)
 
 
-def test_exudyn_model_refuses_pin_friction(mech):
-    pytest.importorskip("exudyn")
-    from study.exudyn_models.translate import build
-
-    q, qd = full_state(*START)
-    with pytest.raises(ValueError, match=r"does not implement friction in revolute joints \('pin' of "):
-        build(mech, q, qd, friction="regularized")
-
-
 def test_friction_none_ignores_the_pin_friction(mech):
     r = study.simulate(mech, t_end=0.2, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP)
     e = r.energies
@@ -339,21 +365,8 @@ def test_pin_between_two_moving_bodies_dissipates_its_work():
     torque acts on both bars, equal and opposite, so E(t) - E(0) is its work tau * omega_rel, which never grows."""
     from study.model.compile import compile_description
 
-    v = dict(m1=1.0, I1=0.03, l1=0.3, m2=0.8, I2=0.02, l2=0.25, g=9.81, mu=0.3, r=0.05)
-    d = study.Description("pin_friction_double", ["th1", "th2", "x", "y"], v)
-    p = d.p
-    th1, th2, x, y = d.q
-    d.ground("O", 0, 0)
-    d.body("upper", p.m1, p.I1, {"top": (0, p.l1), "tip": (0, -p.l1)}, angle=th1)
-    d.body("lower", p.m2, p.I2, {"top": (0, p.l2)}, angle=th2, position=(x, y))
-    d.revolute("shoulder", (study.GROUND, "O"), ("upper", "top"))
-    d.revolute("elbow", ("upper", "tip"), ("lower", "top"), friction=study.Friction(p.mu, p.mu), radius=p.r)
-    d.gravity(p.g)
-    eom = compile_description(lower(d))
-    a1, a2, w2 = 0.8, -0.3, 4.0
-    q0 = np.array([a1, a2, 2 * v["l1"] * math.sin(a1) + v["l2"] * math.sin(a2),
-                   -2 * v["l1"] * math.cos(a1) - v["l2"] * math.cos(a2)])
-    qd0 = np.array([0.0, w2, v["l2"] * w2 * math.cos(a2), v["l2"] * w2 * math.sin(a2)])
+    eom = compile_description(lower(describe_double(DOUBLE)))
+    q0, qd0 = double_state(DOUBLE, 0.8, -0.3, 0.0, 4.0)
     r = study.simulate(eom, q0, qd0, t_end=1.0, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
                        output_step=OUTPUT_STEP, friction="regularized", friction_eps=EPS)
     e = r.energies

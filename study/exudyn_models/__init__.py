@@ -17,7 +17,8 @@ settings
 building
     Model building blocks: planar rigid bodies, joints, loads, sensors read back as arrays.
 guards
-    The guarded joint-reaction reading in a user function, and the regularized guide friction.
+    The guarded joint-reaction reading in a user function, and the regularized friction along a guide and in a
+    revolute joint.
 solve
     Running a built model (seeding, SolveDynamic, CPU timing) and post-processing into a SimulationResult.
 translate

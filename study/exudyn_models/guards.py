@@ -1,4 +1,5 @@
-"""The guarded reading of a joint reaction inside a user function, and the regularized guide friction built on it."""
+"""The guarded reading of a joint reaction inside a user function, and the regularized friction laws built on it:
+along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFriction`)."""
 
 from __future__ import annotations
 
@@ -46,7 +47,37 @@ class ReactionGuard:
         self.accepted = self.read(mbs)
 
 
-class GuideFriction:
+class RecordedFriction:
+    """What the friction laws share: their guard, and the record of the law's values at every step.
+
+    ``last`` holds the values of the recording user-function call; the last one of each step (the converged
+    residual evaluation) is appended to ``history`` in a post-step function, which also accepts the guard's
+    reaction; before the first step the initial-acceleration evaluation is recorded (t = 0).
+    """
+
+    def __init__(self, model: Model, guard: ReactionGuard, width: int):
+        self.guard = guard
+        self.width = width
+        self.last = (float("nan"),) * width
+        self.history: list[tuple[float, ...]] = []
+        model.pre_step.append(self._pre_step)
+        model.post_step.append(self._post_step)
+
+    def _pre_step(self, mbs, t) -> None:
+        if not self.history:           # before the first step: the initial-acceleration evaluation
+            self.history.append(self.last)
+
+    def _post_step(self, mbs, t) -> None:
+        self.history.append(self.last)
+        self.guard.accept(mbs)
+
+    def reset(self) -> None:
+        self.history.clear()
+        self.last = (float("nan"),) * self.width
+        self.guard.calls = self.guard.substitutions = 0
+
+
+class GuideFriction(RecordedFriction):
     """Regularized Coulomb friction plus constant resistance at a point sliding along a guide's axis.
 
     Tangential force on the slider at its point (along the unit axis, global frame):
@@ -64,15 +95,11 @@ class GuideFriction:
 
     def __init__(self, model: Model, marker: int, axis, guard: ReactionGuard, mu: float, resistance: float,
                  eps: float, guide: tuple[int, float, int] | None = None):
+        super().__init__(model, guard, 4)
         self.marker = marker
         self.axis = (float(axis[0]), float(axis[1]))
-        self.guard = guard
         self.mu, self.resistance, self.eps = float(mu), float(resistance), float(eps)
         self.guide = guide
-        self.last = (float("nan"),) * 4
-        self.history: list[tuple[float, ...]] = []
-        model.pre_step.append(self._pre_step)
-        model.post_step.append(self._post_step)
 
     def __call__(self, mbs, t, load_vector):
         if self.guide is not None:
@@ -115,18 +142,43 @@ class GuideFriction:
         f, axis, lever = self._moving(mbs, record=False)
         return [0.0, 0.0, -f * (lever[0] * axis[1] - lever[1] * axis[0])]
 
-    def _pre_step(self, mbs, t) -> None:
-        if not self.history:           # before the first step: the initial-acceleration evaluation
-            self.history.append(self.last)
 
-    def _post_step(self, mbs, t) -> None:
-        self.history.append(self.last)
-        self.guard.accept(mbs)
+class PinFriction(RecordedFriction):
+    """Regularized Coulomb friction of a revolute joint between bodies a and b (either may be ground).
 
-    def reset(self) -> None:
-        self.history.clear()
-        self.last = (float("nan"),) * 4
-        self.guard.calls = self.guard.substitutions = 0
+    Torque on body a (and its opposite on body b): ``tau = -(mu r |R|_delta + T0) tanh(omega_rel / eps)``,
+    ``|R|_delta = sqrt(|R|^2 + delta^2)``, with |R| the magnitude of the joint's reaction from ``guard`` and
+    ``omega_rel = theta_a' - theta_b'`` from the nodes' angular velocities (``nodes`` = (node of a, node of b), None
+    for ground, whose rate is 0). ``coefficient`` = mu r [m], ``resistance`` = T0 [N m], ``eps`` [rad/s], ``delta``
+    [N]. :meth:`load` gives the load user function of either body; ``history`` rows: [|R| used, omega_rel, tau].
+    """
+
+    def __init__(self, model: Model, nodes: tuple[int | None, int | None], guard: ReactionGuard, coefficient: float,
+                 resistance: float, eps: float, delta: float):
+        super().__init__(model, guard, 3)
+        self.nodes = nodes
+        self.coefficient, self.resistance = float(coefficient), float(resistance)
+        self.eps, self.delta = float(eps), float(delta)
+
+    def torque(self, mbs, record: bool) -> float:
+        """tau (the torque on body a) at the current state; ``record``: count the guard's call and keep ``last``."""
+        rates = [0.0 if n is None else mbs.GetNodeOutput(n, OVT.AngularVelocity)[2] for n in self.nodes]
+        omega = rates[0] - rates[1]
+        r = self.guard.value(mbs) if record else self.guard.peek(mbs)
+        tau = -(self.coefficient * math.sqrt(r * r + self.delta * self.delta) + self.resistance) \
+            * math.tanh(omega / self.eps)
+        if record:
+            self.last = (r, omega, tau)
+        return tau
+
+    def load(self, side: int, record: bool) -> Callable:
+        """The LoadTorqueVector user function of body a (``side`` 0: tau) or body b (``side`` 1: -tau). One load of
+        the joint records (``record``); the other evaluates the same state and reaction without counting."""
+        sign = 1.0 if side == 0 else -1.0
+
+        def user(mbs, t, load_vector):
+            return [0.0, 0.0, sign * self.torque(mbs, record)]
+        return user
 
 
 def initialize(model: Model, settings: exu.SimulationSettings, read: Callable[[], object]):
@@ -143,18 +195,18 @@ def initialize(model: Model, settings: exu.SimulationSettings, read: Callable[[]
         solver.FinalizeSolver(model.mbs, settings)
 
 
-def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictions: list[GuideFriction]) -> dict:
-    """Make the initial-acceleration solve use the consistent normal force.
+def seed_reaction_guards(model: Model, settings: exu.SimulationSettings, frictions: list[RecordedFriction]) -> dict:
+    """Make the initial-acceleration solve use the consistent reactions (a guide's normal force, a pin's |R|).
 
     At t = 0 Exudyn computes the initial accelerations with all multipliers 0, so a friction law
-    reading the reaction would see N = 0 and the initial accelerations (and the generalized-alpha
+    reading the reaction would see 0 and the initial accelerations (and the generalized-alpha
     start) would miss the friction. This fixed-point iteration runs only Exudyn's solver
-    initialization repeatedly, each time feeding the guards the normal forces of the previous
+    initialization repeatedly, each time feeding the guards the reactions of the previous
     initialization, until they no longer change. Purely Exudyn: no in-house quantity enters.
 
     Returns
     -------
-    dict with 'seed_iterations' and 'seed_change' (last relative change of N); empty without friction.
+    dict with 'seed_iterations' and 'seed_change' (last relative change of a reaction); empty without friction.
     """
     if not frictions:
         return {}

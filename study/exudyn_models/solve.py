@@ -8,7 +8,7 @@ import exudyn as exu
 import numpy as np
 
 from study.results import SimulationResult, package_versions
-from study.exudyn_models.guards import GuideFriction, initialize, seed_reaction_guards
+from study.exudyn_models.guards import RecordedFriction, initialize, seed_reaction_guards
 from study.exudyn_models.building import Model
 from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, IMPLICIT_SOLVERS, LINEAR_SOLVER_DESCRIPTIONS,
                                           NEWTON_TOLERANCE, SOLVER_DESCRIPTIONS, SOLVER_TYPES, SPECTRAL_RADIUS,
@@ -18,8 +18,8 @@ Array = np.ndarray
 
 
 # ``build(mechanism, q0, qd0, friction, eps)`` returns an object with ``model`` (Model), ``frictions``
-# (list of GuideFriction), ``loads_jacobian`` (0 or 2), ``initial_values()`` -> (qdd, lam) and
-# ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
+# (list of RecordedFriction: the guides' and pins' friction laws), ``loads_jacobian`` (0 or 2), ``initial_values()``
+# -> (qdd, lam) and ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
 def run_model(build, mechanism, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
               eps: float, configuration: str = "python", ignore_singular: bool = False,
               linear_solver: str = "dense", newton_tolerance: float = NEWTON_TOLERANCE) -> SimulationResult:
@@ -80,11 +80,12 @@ def solve(model: Model, settings: exu.SimulationSettings, solver: str) -> dict:
     }
 
 
-def friction_history(fric: GuideFriction, grid: RunGrid, stats: dict) -> Array:
+def friction_history(fric: RecordedFriction, grid: RunGrid, stats: dict) -> Array:
     """The friction user function's record at every step (checked), its call counts added to ``stats``."""
     hist = np.asarray(fric.history, dtype=float)
-    if hist.shape != (grid.n_steps + 1, 4):
-        raise RuntimeError(f"friction history has {hist.shape[0]} rows, expected {grid.n_steps + 1}")
+    if hist.shape != (grid.n_steps + 1, fric.width):
+        raise RuntimeError(f"friction history has shape {hist.shape}, expected ({grid.n_steps + 1}, {fric.width}): one "
+                           f"row per step plus t = 0")
     stats.update(friction_user_function_calls=fric.guard.calls, friction_guard_substitutions=fric.guard.substitutions)
     return hist
 

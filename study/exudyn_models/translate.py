@@ -43,6 +43,14 @@ Model
   On a moving guide the axis turns with the guide, the sliding velocity is relative to the guide's point
   under the slider, and the guide carries the opposite force (a force at its centre of mass and the torque
   of its lever: the same load as the force at the slider point).
+  A revolute joint with friction data (a pin, ``friction=Friction(mu_s, mu_k, T0), radius=r``) whose mu_k or T0
+  is > 0 gets the regularized law of :class:`~study.exudyn_models.guards.PinFriction`: the torque
+  tau = -(mu_k r sqrt(|R|^2 + delta^2) + T0) tanh(omega_rel/eps) on its body a and -tau on its body b
+  (LoadTorqueVector user functions; nothing on ground), omega_rel = theta_a' - theta_b' from the nodes, |R| the
+  magnitude of the RevoluteJoint2D's 'Force' (its multipliers, a global vector; only the magnitude enters) through
+  a ReactionGuard, delta = ``pin_friction_norm_width`` (reference/tolerances.toml, the in-house value), eps read
+  in rad/s. Exudyn has only this regularized law: friction='exact' and 'sign' are not run modes
+  (settings.FRICTION_MODES), for pins as for guides.
 
 Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
 ---------------------------------------------------------------------------
@@ -57,15 +65,19 @@ Result mapping (in-house relative coordinates, ``M qdd + Phi_q^T lam = Q``)
   lam = ForceLocal . n_local, ForceLocal = Exudyn's force on the marker-0 (guide) body in the
   guide's body frame and n_local the normal in that frame.
 * forces: ``normal_<c>`` = -lam of contact c's row; ``friction_<c>`` (Coulomb part) and
-  ``resistance_<c>`` (if the description has a resistance) along the guide axis; ``<load>`` = the
+  ``resistance_<c>`` (if the description has a resistance) along the guide axis; after the contacts, every
+  pin p: ``normal_<p>`` = |R| (the joint's reaction magnitude) and ``friction_<p>`` = tau, the whole friction
+  torque on its body a (Coulomb and T0, as in the in-house result); ``<load>`` = the
   torque, or the force along the guide axis of the loaded body's prismatic joint (else along global
   x); ``joint_<J>_x/_y`` (every revolute joint) = force of J on its second body, global;
   ``joint_<J>_n`` (every prismatic joint) = force on the slider along the joint's normal = -lam.
-* energies: kinetic, potential (gravity + springs), ``work_<load>`` and ``work_friction_<c>``.
+* energies: kinetic, potential (gravity + springs), ``work_<load>``, ``work_friction_<c>`` and
+  ``work_friction_<p>`` (the pair's power tau * omega_rel integrated).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -76,10 +88,11 @@ import study.exudyn_models.building as building
 import study.exudyn_models.settings as settings
 import study.exudyn_models.solve as solve
 from study.exudyn_models.building import OVT, BodyState, Model
-from study.exudyn_models.guards import GuideFriction, ReactionGuard
+from study.exudyn_models.guards import GuideFriction, PinFriction, ReactionGuard, RecordedFriction
 from study.model.coordinates import poses
 from study.model.joints import GROUND, Description, Distance, Prismatic, Revolute
 from study.params import ParameterSet
+from study.reference_data import tolerance
 from study.results import SimulationResult
 
 Array = np.ndarray
@@ -315,8 +328,8 @@ def _law_series(law: Law, t: Array, inputs: list[Array]) -> Array:
 # --------------------------------------------------------------------------------------------
 # the built model
 # --------------------------------------------------------------------------------------------
-def _active(d: Description, j: Prismatic) -> bool:
-    """A contact whose friction law is not identically zero (kinetic coefficient or resistance > 0)."""
+def _active(d: Description, j: Prismatic | Revolute) -> bool:
+    """A contact or pin whose friction law is not identically zero (kinetic coefficient or resistance > 0)."""
     if j.friction is None:
         return False
     subs = {getattr(d.p, k): sp.Float(v) for k, v in d.values.items()}
@@ -324,7 +337,7 @@ def _active(d: Description, j: Prismatic) -> bool:
 
 
 def loads_jacobian(d: Description) -> int:
-    """``computeLoadsJacobian``: 2 when the description has an active friction contact, else 0.
+    """``computeLoadsJacobian``: 2 when the description has an active friction contact or pin, else 0.
 
     The regularized friction and resistance tanh(v/eps) need their derivative in the Newton matrix
     (without it Newton diverges, see settings.simulation_settings); the frictionless runs of such a
@@ -334,7 +347,7 @@ def loads_jacobian(d: Description) -> int:
     h = 1e-3: 55 962 vs 55 735) while the extra user-function calls per iteration double the CPU
     time; an on/off law is piecewise constant, its numerical derivative across a switch meaningless.
     """
-    return 2 if any(_active(d, j) for j in d.contacts()) else 0
+    return 2 if any(_active(d, j) for j in [*d.contacts(), *d.pins()]) else 0
 
 
 @dataclass
@@ -351,12 +364,13 @@ class Built:
     evaluation: dict = field(default_factory=dict)    # law name -> how Exudyn evaluates it
     potentials: dict = field(default_factory=dict)    # potential name -> Law (energy)
     frictions_by_contact: dict = field(default_factory=dict)
+    frictions_by_pin: dict = field(default_factory=dict)
     normals: dict = field(default_factory=dict)       # prismatic joint -> n in the guide's body frame
     q0: Array = None                                  # the relative coordinates of the reference configuration
 
     @property
-    def frictions(self) -> list[GuideFriction]:
-        return list(self.frictions_by_contact.values())
+    def frictions(self) -> list[RecordedFriction]:
+        return [*self.frictions_by_contact.values(), *self.frictions_by_pin.values()]
 
     # --- lam mapping -----------------------------------------------------------------------------
     def _row_sources(self, names) -> list[tuple[str, int | None]]:
@@ -448,6 +462,18 @@ class Built:
             if j.friction.resistance != 0:
                 forces[f"resistance_{j.name}"] = resistance
             works[f"friction_{j.name}"] = (coulomb + resistance) * v_t
+        for j in d.pins():
+            forces[f"normal_{j.name}"] = np.hypot(outputs[j.name][:, 0], outputs[j.name][:, 1])
+            if not _active(d, j):
+                continue
+            fric = self.frictions_by_pin.get(j.name)
+            if fric is not None:
+                hist = solve.friction_history(fric, grid, stats)
+                omega, tau = hist[:, 1], hist[:, 2]
+            else:
+                omega = tau = np.zeros_like(t)
+            forces[f"friction_{j.name}"] = tau
+            works[f"friction_{j.name}"] = tau * omega
         for j in d.joints:
             f = outputs[j.name]
             if isinstance(j, Revolute):
@@ -466,13 +492,14 @@ class Built:
             potential = potential + _law_series(law, t, _series_inputs(law, d, subs, pos, vel))[:, 0]
 
         active = [j for j in d.contacts() if _active(d, j)]
+        active_pins = [j for j in d.pins() if _active(d, j)]
         meta = {
             "description": d.name,
             "loads_jacobian": self.loads_jacobian,
             "law_evaluation": dict(self.evaluation),
             "lam_mapping": self.lam_mapping(rows),
-            "reaction_reading": ("hybrid guard: live Newton iterate of the guide reaction, last accepted value "
-                                 "while the live one is the zero of the first Newton iteration; initial "
+            "reaction_reading": ("hybrid guard: live Newton iterate of the guide's or pin's reaction, last accepted "
+                                 "value while the live one is the zero of the first Newton iteration; initial "
                                  "accelerations use the fixed-point seeded reaction") if self.frictions else "not used",
             "force_conventions": self.force_conventions(forces),
             "load_evaluation": "laws lambdified with the parameter values bound, evaluated in Exudyn user functions "
@@ -480,9 +507,11 @@ class Built:
                                "switching function at the current state (no event location); the recorded "
                                "'<load>' series are the laws evaluated on the converged states",
         }
-        if active:
-            meta["work_friction"] = "work_friction_<c>: Coulomb plus resistance (the whole tangential guide force)"
-        friction = self.friction if active else "none (no friction contact with mu_k > 0 or resistance > 0)"
+        if active or active_pins:
+            meta["work_friction"] = ("work_friction_<c>: Coulomb plus resistance (the whole tangential guide force); "
+                                     "work_friction_<p>: the pin's torque tau times omega_rel (Coulomb plus T0)")
+        friction = self.friction if active or active_pins else \
+            "none (no friction contact or pin with mu_k > 0 or resistance > 0)"
         return solve.assemble_result(eom, self.mech.parameters, grid, solver, self.eps, friction, t=t, q=q, qd=qd, qdd=qdd,
                                       lam=lam, kinetic=kinetic, potential=potential, works=works, forces=forces,
                                       stats=stats, meta=meta)
@@ -511,8 +540,14 @@ class Built:
 
     def force_conventions(self, forces) -> dict[str, str]:
         out = {}
+        pins = {j.name for j in self.d.pins()}
         for key in forces:
-            if key.startswith("normal_"):
+            if key.startswith("normal_") and key[7:] in pins:
+                out[key] = f"magnitude |R| of the reaction of revolute joint '{key[7:]}' (its Exudyn 'Force')"
+            elif key.startswith("friction_") and key[9:] in pins:
+                out[key] = (f"friction torque on the first body of revolute joint '{key[9:]}', "
+                            f"-(mu_k r sqrt(|R|^2 + delta^2) + T0) tanh(omega_rel/eps) (its opposite on the second)")
+            elif key.startswith("normal_"):
                 out[key] = f"force on the slider along the normal of '{key[7:]}' = -lam of its row"
             elif key.startswith("friction_"):
                 out[key] = f"Coulomb force on the slider along the axis of '{key[9:]}', -mu_k |N| tanh(v_t/eps)"
@@ -541,11 +576,6 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
     mech = as_mechanism(mechanism)
     kin = _kinematics(mech)
     d, subs = kin.d, kin.subs
-    pins = [j.name for j in d.joints if isinstance(j, Revolute) and j.friction is not None]
-    if pins and friction != "none":   # refused, never silently left out
-        raise ValueError(f"the Exudyn model does not implement friction in revolute joints "
-                         f"({', '.join(map(repr, pins))} of {d.name!r}): run it with friction='none' or use the "
-                         f"in-house reference path")
     val = lambda e: float(sp.sympify(e).xreplace(subs))  # noqa: E731
     g = val(d.gravity_g) if d.gravity_g is not None else 0.0
     model = Model()
@@ -656,6 +686,23 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
             built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
                                                       "mbs.GetObjectOutput; no Exudyn element or symbolic user "
                                                       "function has access to it)")
+        delta = tolerance("pin_friction_norm_width")
+        for j in d.pins():
+            if not _active(d, j):
+                continue
+            obj = model.joints[j.name][0]
+            guard = ReactionGuard(lambda mbs, o=obj: math.hypot(*mbs.GetObjectOutput(o, OVT.Force)[:2]))
+            sides = (j.a[0], j.b[0])
+            fric = PinFriction(model, tuple(None if b == GROUND else model.node(b) for b in sides), guard,
+                               coefficient=val(j.friction.mu_kinetic) * val(j.radius),
+                               resistance=val(j.friction.resistance), eps=eps, delta=delta)
+            loaded = [(side, body) for side, body in enumerate(sides) if body != GROUND]
+            for k, (side, body) in enumerate(loaded):   # the first load records, the other reads the same state
+                model.torque(com(body), user=fric.load(side, record=k == 0))
+            built.frictions_by_pin[j.name] = fric
+            built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
+                                                      "mbs.GetObjectOutput; no Exudyn element or symbolic user "
+                                                      "function has access to it)")
     if configuration == "tuned" and not built.frictions:
         built.loads_jacobian = 0    # no Python load left whose derivative Newton needs
     model.assemble()
@@ -721,9 +768,10 @@ def run(mechanism: Mechanism | ParameterSet, t_end: float, h: float, solver: str
     output_step : float, optional
         Sampling of the result, a whole multiple of h; default every step.
     friction : {'regularized', 'none'}
-        'none' leaves out the Coulomb friction and resistance of every contact.
+        'none' leaves out the Coulomb friction and resistance of every contact and pin.
     eps : float
-        Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (settings.DEFAULT_EPS).
+        Velocity scale of tanh(v/eps) in the friction and resistance laws [m/s] (settings.DEFAULT_EPS); a pin's
+        law reads the same number in rad/s (tanh(omega_rel/eps)), as the in-house friction_eps.
     configuration : {'python', 'tuned'}
         How Exudyn evaluates the load laws and iterates (settings.CONFIGURATIONS); both solve the same
         model, 'tuned' as Exudyn recommends for speed.
