@@ -6,14 +6,14 @@ the package names it. :func:`validate` runs, from the consistent initial state o
 
 1. the in-house reference: DOP853 at the reference tolerances with post-step projection;
 2. every stabilization method (none, Baumgarte, sliding mode, projection) at everyday settings (DOP853, rtol 1e-8),
-   and, where a contact has friction, every friction treatment (exact, regularized, plain sgn with RK4);
+   and, where a slider or a pin has friction, every friction treatment (exact, regularized, plain sgn with RK4);
 3. Exudyn from the same description (:mod:`study.exudyn_models`), generalized-alpha index 3 and trapezoidal index 2,
    at three steps halving from ``h``; each against the in-house reference, with observed orders;
 4. the joint reactions of both engines.
 
 The runs are saved (``runs/``), the tables are written from them (``tables/``), the figures from the tables and the
 saved runs (``figures/``), and ``report.md`` from the tables. Exudyn has regularized friction only, so where a
-contact has friction the comparison with Exudyn is at the regularized law (width ``friction_eps``) on both sides.
+slider or pin has friction the comparison with Exudyn is at the regularized law (width ``friction_eps``) on both sides.
 """
 
 from __future__ import annotations
@@ -70,8 +70,9 @@ class Settings:
 
 
 def _friction(mech: Mechanism) -> bool:
-    """Whether a contact of the mechanism carries friction data."""
-    return bool(mech.equations().contacts)
+    """Whether a slider's contact or a pin of the mechanism carries friction data."""
+    eom = mech.equations()
+    return bool(eom.contacts or eom.pin_frictions)
 
 
 def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[str, str]]:

@@ -14,7 +14,7 @@ import study
 from study.model.coordinates import lower
 from study.model.joints import GROUND, Description, DescriptionError, Potential
 from study.solver.initial import InitialConditionError
-from test_free_bodies import _parameters
+from test_free_bodies import parameter_set
 
 VALUES = {"m": 1.0, "J": 0.1, "a": 0.5, "g": 9.81, "zero": 0.0}
 BOTH = ("relative", "absolute")
@@ -135,7 +135,7 @@ def branch_pendulum(branch) -> Description:
 
 
 def test_a_branch_condition_false_at_the_initial_state_is_refused(tmp_path):
-    ps = _parameters(tmp_path, "pend", {k: VALUES[k] for k in "mJag"}, [3.0], [0.0], [0])
+    ps = parameter_set(tmp_path, "pend", {k: VALUES[k] for k in "mJag"}, [3.0], [0.0], [0])
     d = branch_pendulum((sp.cos(sp.Symbol("q_th", real=True)), "cos(th) > 0"))
     with pytest.raises(InitialConditionError, match=r"pend: .*q = \[3\.\], which is not on the assembly branch "
                                                     r"'cos\(th\) > 0' .*its condition cos\(q_th\) > 0 is -0\.98999"):

@@ -243,13 +243,13 @@ def test_sign_treatment_with_rk4_matches_the_hand_rk4(mech):
     assert dev <= tolerance("fast_fixed_step_agreement") * np.abs(hand[:, 0]).max()
 
 
-def hand_exact(t_end, v=VALUES, delta=DELTA):
-    """The exact stick/slip law in th: slip phases with the frozen direction d (s = d), each ended where th' = 0
-    (located by solve_ivp's event); at rest the pin holds if the torque that keeps th'' = 0, m g l sin th, is within
-    mu_s r |R|_delta + T0, where at rest and held R = (0, m g); else it slides where gravity pushes, d = -sgn(sin th).
-    Returns (t_stick or None, the slip segments' solutions)."""
+def hand_exact(t_end, v, delta=DELTA):
+    """The exact stick/slip law in th: slip phases with the frozen direction d (s = d, coefficient v["mu"] = mu_k),
+    each ended where th' = 0 (located by solve_ivp's event); at rest the pin holds if the torque that keeps th'' = 0,
+    m g l sin th, is within mu_s r |R|_delta + T0, where at rest and held R = (0, m g); else it slides where gravity
+    pushes, d = -sgn(sin th). Returns (t_stick or None, the slip segments' solutions)."""
     m, l, g = v["m"], v["l"], v["g"]
-    capacity = v["mu"] * v["r"] * math.sqrt((m * g) ** 2 + delta ** 2) + v["T0"]
+    capacity = v["mu_s"] * v["r"] * math.sqrt((m * g) ** 2 + delta ** 2) + v["T0"]
     t, y, segments = 0.0, np.array(START, dtype=float), []
     while t < t_end:
         if abs(m * g * l * math.sin(y[0])) <= capacity:
@@ -257,7 +257,7 @@ def hand_exact(t_end, v=VALUES, delta=DELTA):
         d = -math.copysign(1.0, math.sin(y[0]))
         stop = lambda t, y, d: y[1]    # noqa: E731
         stop.terminal, stop.direction = True, -d   # th' returns to 0 (not its start at 0)
-        sol = solve_ivp(lambda t, y, d: [y[1], hand_accel(y[0], y[1], d)[0]], (t, t_end), y, args=(d,),
+        sol = solve_ivp(lambda t, y, d: [y[1], hand_accel(y[0], y[1], d, v)[0]], (t, t_end), y, args=(d,),
                         method="DOP853", rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"),
                         events=stop, dense_output=True)
         assert sol.success
@@ -268,23 +268,32 @@ def hand_exact(t_end, v=VALUES, delta=DELTA):
     return None, segments
 
 
-T_EXACT = 4.0     # the pendulum comes to rest after five swings, near 3.55 s
+T_EXACT = 4.0     # the study's pin_pendulum comes to rest after five swings, near 3.55 s
 
 
 @pytest.fixture(scope="module")
-def exact(mech):
-    return study.simulate(mech, t_end=T_EXACT, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
+def study_pendulum():
+    """The study's case (reference/pin_pendulum.toml), its values in the hand model's names (mu = mu_k)."""
+    v = vars(study.load_parameters("pin_pendulum").values)
+    return {**{k: v[k] for k in ("m", "Ic", "l", "g", "r", "T0", "mu_s")}, "mu": v["mu_k"]}
+
+
+@pytest.fixture(scope="module")
+def exact():
+    return study.simulate("pin_pendulum", t_end=T_EXACT, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
                           output_step=OUTPUT_STEP, friction="exact")
 
 
-def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact):
-    """Stick time and motion against the hand model; the stuck pin's torque within its static limit."""
-    r = exact
-    t_stick, segments = hand_exact(T_EXACT)
+def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact, study_pendulum):
+    """The study's pin_pendulum: stick time and motion against the hand model (its own start, th = 1 rad at rest,
+    as the parameter file's); the stuck pin's torque is the hand model's and within its static limit."""
+    r, v = exact, study_pendulum
+    assert r.q[0, 0] == START[0] and r.qd[0, 0] == START[1]
+    t_stick, segments = hand_exact(T_EXACT, v)
     assert t_stick is not None and len(segments) >= 4
     stops = [tr for tr in r.stats["friction_transitions"] if tr.get("contact") == "pin" and tr["to"] == "stick"]
-    print(f"exact pin: hand stick at {t_stick:.9f} s after {len(segments)} slip phases; study: "
-          f"{[round(s['t'], 9) for s in stops]}")
+    print(f"exact pin: hand stick at {t_stick:.9f} s after {len(segments)} slip phases; study (difference): "
+          f"{[(round(x['t'], 9), round(x['t'] - t_stick, 12)) for x in stops]}")
     assert len(stops) == 1
     # the located stop is an event of the adaptive run: its time error follows the motion's (global) error
     assert abs(stops[0]["t"] - t_stick) <= tolerance("adaptive_global_error_factor") * RTOL * T_EXACT
@@ -297,8 +306,8 @@ def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact):
     held = r.t > stops[0]["t"]
     assert np.all(r.forces["stick_pin"][held] == 1.0) and np.ptp(r.q[held, 0]) <= bound
     need = np.abs(r.forces["friction_pin"][held])
-    limit = VALUES["mu"] * VALUES["r"] * np.sqrt(r.forces["normal_pin"][held] ** 2 + DELTA ** 2) + VALUES["T0"]
-    hold = VALUES["m"] * VALUES["g"] * VALUES["l"] * np.abs(np.sin(r.q[held, 0]))   # the hand model's, at rest
+    limit = v["mu_s"] * v["r"] * np.sqrt(r.forces["normal_pin"][held] ** 2 + DELTA ** 2) + v["T0"]
+    hold = v["m"] * v["g"] * v["l"] * np.abs(np.sin(r.q[held, 0]))   # the hand model's, at rest
     print(f"stuck pin: torque {need.max():.6g} N m (hand {hold.max():.6g}), limit {limit.max():.6g} N m")
     assert np.all(need <= limit) and np.abs(need - hold).max() <= 1e-9 * hold.max() and hold.min() > 0.1
 
