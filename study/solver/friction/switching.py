@@ -13,7 +13,8 @@ Array = np.ndarray
 
 
 class FrictionLawError(SimulationError):
-    """A contact at rest can neither stick nor slide consistently (static limit below the kinetic force)."""
+    """A contact at rest can neither stick nor slide consistently (static limit below the kinetic force), or holding
+    it would lock another sliding contact or pin (a statically indeterminate hold)."""
 
 
 @dataclass
@@ -139,6 +140,7 @@ class StickSlipSwitching:
         held = self._held(t, q, qd, mode, j)
         if held is not None and held.margin[j] >= 0:
             new[e] = 1
+            self._check_not_locking(t, q, qd, tuple(new), j)
         else:
             new[e], new[e + 1] = -1, self._free_direction(t, q, qd, mode, j)
             if held is not None:
@@ -147,6 +149,43 @@ class StickSlipSwitching:
         if record and new != tuple(mode):  # a contact found again at rest in its own direction is no transition
             self._log(t, j, was, new, held)
         return new
+
+    def _check_not_locking(self, t, q, qd, new, j) -> None:
+        """Raise :class:`FrictionLawError` if holding entry j (stuck in ``new``) locks an entry that still slides.
+
+        Entry i is locked when the stuck entries and the constraints leave it no motion: its mobility A_i qdd under a
+        unit force A_i^T (A_i its velocity row; qdd from the constraints plus every stuck entry's row) drops to
+        round-off (``CONSISTENCY_RTOL`` of its mobility without entry j held). All the friction entries of a
+        one-degree-of-freedom mechanism come to rest together like that: which of them holds, and how much, is
+        statically indeterminate, and the exact treatment refuses it rather than pick one.
+        """
+        dyn = self.dyn
+        stick, _ = dyn.phases(new, None)
+        sliding = [i for i in range(dyn.n_contacts) if not stick[i]]
+        if not sliding:
+            return
+        A, _ = dyn.rate_rows(q, qd)
+        M, J = dyn._mass(t, q), dyn._phi_q(t, q)
+        others = [k for k in range(dyn.n_contacts) if stick[k] and k != j]
+
+        def mobility(i, held):
+            Jx = np.vstack([J, A[held]])
+            try:
+                qdd = dyn.accelerations.solve(M, A[i], Jx, np.zeros(Jx.shape[0]))[0]
+            except np.linalg.LinAlgError:   # the stuck rows are dependent: i cannot move either
+                return 0.0
+            return float(A[i] @ qdd)
+
+        locked = [dyn.contact_names[i] for i in sliding
+                  if mobility(i, others + [j]) <= CONSISTENCY_RTOL * mobility(i, others)]
+        if locked:
+            name = dyn.contact_names[j]
+            raise FrictionLawError(
+                f"{name!r} comes to rest at t = {t:.9g} s and can be held, but holding it also stops "
+                f"{', '.join(map(repr, locked))} (the mechanism has no motion left for them): how the holding force "
+                f"splits among joints held together is statically indeterminate, and the exact treatment does not "
+                f"choose a split; use friction='regularized', or friction on fewer of these joints",
+                t=float(t), quantity="friction", contact=name)
 
     def _check_slip_starts(self, t, q, qd, new, j, held) -> None:
         """Raise :class:`FrictionLawError` if contact j, too weakly held to stick, cannot slide either.
