@@ -386,3 +386,48 @@ def test_pin_between_two_moving_bodies_dissipates_its_work():
     print(f"double pendulum: energy residual {residual:.3g} J (bound {scale:.3g}), elbow dissipated {-w[-1]:.4g} J")
     assert residual <= scale
     assert w[-1] < -0.05 and np.diff(w).max() <= scale
+
+
+def describe_locked_pair(values, shoulder_friction: bool) -> study.Description:
+    """A four-bar of one degree of freedom: the bars of :func:`describe_double` (both free bodies), the lower bar's
+    tip tied to the ground point P by a distance L (a massless rocker); friction in the elbow, and with
+    ``shoulder_friction`` in the shoulder too."""
+    d = study.Description("locked_pair", ["th1", "th2", "x", "y", "x1", "y1"], dict(values))
+    p = d.p
+    th1, th2, x, y, x1, y1 = d.q
+    d.ground("O", 0, 0)
+    d.ground("P", p.px, p.py)
+    d.body("upper", p.m1, p.I1, {"top": (0, p.l1), "tip": (0, -p.l1)}, angle=th1, position=(x1, y1))
+    d.body("lower", p.m2, p.I2, {"top": (0, p.l2), "tip": (0, -p.l2)}, angle=th2, position=(x, y))
+    pin = dict(friction=study.Friction(p.mu, p.mu), radius=p.r)
+    d.revolute("shoulder", (study.GROUND, "O"), ("upper", "top"), cut=True, **(pin if shoulder_friction else {}))
+    d.revolute("elbow", ("upper", "tip"), ("lower", "top"), **pin)
+    d.distance("rocker", ("lower", "tip"), (study.GROUND, "P"), p.L)
+    d.gravity(p.g)
+    return d
+
+
+@pytest.mark.parametrize("shoulder_friction", [False, True])
+def test_holding_a_pin_that_locks_another_is_refused(shoulder_friction):
+    """Released at rest near its hanging pose, the four-bar is held by its pin friction at once. With one friction pin
+    that is a plain stick; with two, holding either stops the other as well (one degree of freedom), so the split of
+    the holding torque is statically indeterminate: FrictionLawError names both, nothing is chosen silently."""
+    from study.model.compile import compile_description
+    from study.solver.friction import FrictionLawError
+
+    a1, a2, rocker = 0.05, 0.05, 0.3
+    values = {**DOUBLE, "mu": 0.8, "L": rocker}
+    l1, l2 = values["l1"], values["l2"]
+    tip = np.array([2 * l1 * math.sin(a1) + 2 * l2 * math.sin(a2), -2 * l1 * math.cos(a1) - 2 * l2 * math.cos(a2)])
+    values.update(px=float(tip[0] + rocker), py=float(tip[1]))
+    q0, qd0 = double_state(values, a1, a2, 0.0, 0.0, shoulder_friction=True)
+    eom = compile_description(lower(describe_locked_pair(values, shoulder_friction)))
+    options = dict(t_end=0.2, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP,
+                   friction="exact")
+    if not shoulder_friction:
+        r = study.simulate(eom, q0, qd0, **options)
+        assert np.all(r.forces["stick_elbow"] == 1.0) and np.ptp(r.q[:, 0]) <= 1e-9
+        return
+    with pytest.raises(FrictionLawError, match=r"'(shoulder|elbow)' comes to rest at t = 0 s and can be held, but "
+                                               r"holding it also stops '(shoulder|elbow)'.*statically indeterminate"):
+        study.simulate(eom, q0, qd0, **options)
