@@ -7,6 +7,11 @@ validation: ``rule`` (positive, nonnegative, finite) for numbers or ``choices`` 
 Variants override named values of the ``seed`` set; nothing is ever filled in by default, and a
 parameter the mechanism's description needs but the file lacks is an error there.
 
+A file may extend another mechanism's file in its folder (``[meta] extends = "<name>"``): it then holds that file's
+entries and variants as they are (values, units, sources, rules), adds entries of its own, and needs its own
+``[initial_conditions]`` (its coordinates are its own). It cannot replace an inherited entry or variant, so the base
+file stays the one place of its values; its own variants override values of the whole set.
+
 Errors are collected and raised together as one :class:`ParameterError` whose message names
 the file, the key, the offending value and the rule it breaks.
 """
@@ -127,8 +132,50 @@ def available_mechanisms(reference_dir: Path | None = None) -> tuple[str, ...]:
 
 
 def available_variants(mechanism: str, reference_dir: Path | None = None) -> tuple[str, ...]:
-    raw = _read(_path_for(mechanism, reference_dir))
+    """The variants of a mechanism's parameter file (with those of the file it extends, first)."""
+    path = _path_for(mechanism, reference_dir)
+    problems: list[str] = []
+    raw = _extended(_read(path), path, lambda key, value, rule: problems.append(f"  {key} = {shown(value)}: {rule}"))
+    if problems:
+        raise ParameterError(f"{path} (mechanism {mechanism}):\n" + "\n".join(problems))
     return tuple(raw.get("variants", {}))
+
+
+def _extended(raw: dict[str, Any], path: Path, problem, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """``raw`` with the entries and variants of the file its ``[meta] extends`` names (in the same folder), the
+    inherited ones first; an entry or variant defined in both, a missing base file and a cycle are problems."""
+    meta = raw.get("meta", {})
+    base_name = meta.get("extends") if isinstance(meta, dict) else None
+    if base_name is None:
+        return raw
+    path = Path(path)
+    if not isinstance(base_name, str) or not base_name or "/" in base_name or "\\" in base_name:
+        problem("meta.extends", base_name, "must name another mechanism's parameter file in the same folder")
+        return raw
+    base_path = path.parent / f"{base_name}.toml"
+    if base_path.resolve() in seen + (path.resolve(),):
+        chain = " -> ".join([p.stem for p in seen + (path,)] + [base_name])
+        problem("meta.extends", base_name, f"the files extend each other in a cycle: {chain}")
+        return raw
+    try:
+        base = _read(base_path)
+    except ParameterError as exc:
+        problem("meta.extends", base_name, f"the file it names cannot be read: {exc}")
+        return raw
+    base = _extended(base, base_path, problem, seen + (path.resolve(),))
+    merged = dict(raw)
+    for table, what in (("parameters", "an entry"), ("variants", "a variant")):
+        inherited = dict(base.get(table, {}))
+        for key, value in raw.get(table, {}).items():
+            if key in inherited:
+                problem(f"{table}.{key}", "...", f"is also {what} of {base_name}.toml, which this file extends: the "
+                                                  f"file inherits it as it is and cannot replace it"
+                                                  + (" (a variant of its own changes a value)" if table == "parameters"
+                                                     else ""))
+            else:
+                inherited[key] = value
+        merged[table] = inherited
+    return merged
 
 
 def _path_for(mechanism: str, reference_dir: Path | None) -> Path:
@@ -192,6 +239,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     def problem(key: str, value: Any, rule: str) -> None:
         problems.append(f"  {key} = {shown(value)}: {rule}")
 
+    raw = _extended(raw, path, problem)
     unknown_sections = set(raw) - {"meta", "parameters", "initial_conditions", "variants"}
     for key in sorted(unknown_sections):
         problem(key, "...", "unknown top-level table (allowed: meta, parameters, initial_conditions, variants)")

@@ -106,3 +106,62 @@ def test_entry_needs_unit_and_source():
     del doc["parameters"]["l1"]["source"]
     with pytest.raises(ParameterError, match=r"parameters\.l1 .*missing keys"):
         parse(doc, "quick_return")
+
+
+# --- a file that extends another ([meta] extends) ---------------------------------------------------------------
+def test_extending_file_holds_the_base_entries_and_variants_as_they_are():
+    """reference/slider_crank_pins.toml extends slider_crank.toml: every entry and variant of the paper's file, with
+    its value, unit and source, and its own pin entries; its hash covers both."""
+    from study.params import available_variants
+
+    assert available_variants("slider_crank_pins") == available_variants("slider_crank")
+    for variant in available_variants("slider_crank"):
+        base, ext = load_parameters("slider_crank", variant), load_parameters("slider_crank_pins", variant)
+        for name in vars(base.values):
+            assert getattr(ext.values, name) == getattr(base.values, name), (variant, name)
+            assert ext.units[name] == base.units[name] and ext.sources[name] == base.sources[name]
+        assert {"r_O", "mu_B"} <= set(ext.sources) and ext.variant_note == base.variant_note
+        assert ext.sha256 != base.sha256 and ext.initial != base.initial
+
+
+def _entry(value):
+    return f'value = {value}\nunit = "-"\nsource = "test"\nrule = "finite"\ndoc = "test"\n'
+
+
+def _file(folder, name, extends=None, entries=None, variants=None):
+    meta = f'[meta]\nmechanism = "{name}"\n' + (f'extends = "{extends}"\n' if extends else "")
+    text = [meta] + [f"[parameters.{k}]\n{_entry(v)}" for k, v in (entries or {}).items()]
+    text.append('[initial_conditions.printed]\nq = [0.0]\nqd = [0.0]\nsource = "test"\n'
+                '[initial_conditions.consistent]\nindependent = [0]\nq_independent = [0.0]\nqd_independent = [0.0]\n'
+                'branch = "none"\nsource = "test"\n')
+    for v, overrides in (variants or {}).items():
+        text.append(f"[variants.{v}]\nnote = \"{v}\"\n" + "".join(f"{k} = {x}\n" for k, x in overrides.items()))
+    (folder / f"{name}.toml").write_text("\n".join(text))
+
+
+def test_extending_file_adds_entries_and_variants_of_its_own(tmp_path):
+    _file(tmp_path, "base_m", entries={"a": 1.0, "b": 2.0}, variants={"seed": {}, "big": {"a": 10.0}})
+    _file(tmp_path, "ext_m", extends="base_m", entries={"c": 3.0}, variants={"big_c": {"c": 30.0, "b": 20.0}})
+    from study.params import available_variants
+
+    assert available_variants("ext_m", tmp_path) == ("seed", "big", "big_c")
+    values = {v: vars(load_parameters("ext_m", v, reference_dir=tmp_path).values) for v in ("seed", "big", "big_c")}
+    assert values == {"seed": {"a": 1.0, "b": 2.0, "c": 3.0}, "big": {"a": 10.0, "b": 2.0, "c": 3.0},
+                      "big_c": {"a": 1.0, "b": 20.0, "c": 30.0}}
+
+
+@pytest.mark.parametrize("case, message", [
+    ("entry", r"parameters\.a = '\.\.\.': is also an entry of base_m\.toml, which this file extends: the file "
+              r"inherits it as it is and cannot replace it \(a variant of its own changes a value\)"),
+    ("variant", r"variants\.big = '\.\.\.': is also a variant of base_m\.toml, which this file extends"),
+    ("missing", r"meta\.extends = 'nowhere': the file it names cannot be read: .*nowhere\.toml: parameter file not "
+                r"found"),
+    ("cycle", r"meta\.extends = 'ext_m': the files extend each other in a cycle: ext_m -> base_m -> ext_m"),
+])
+def test_extending_file_refuses_replacements_missing_bases_and_cycles(tmp_path, case, message):
+    _file(tmp_path, "base_m", extends="ext_m" if case == "cycle" else None, entries={"a": 1.0},
+          variants={"seed": {}, "big": {"a": 10.0}})
+    _file(tmp_path, "ext_m", extends="nowhere" if case == "missing" else "base_m",
+          entries={"a": 5.0} if case == "entry" else {"c": 3.0}, variants={"big": {}} if case == "variant" else None)
+    with pytest.raises(ParameterError, match=message):
+        load_parameters("ext_m", "seed", reference_dir=tmp_path)

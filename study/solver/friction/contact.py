@@ -156,6 +156,10 @@ class FrictionDynamics(Dynamics):
         fraction = getattr(self.law, "static_resistance_fraction", 1.0)
         self._static_resistance = fraction * np.concatenate([self._resistance, [p.torque for p in pins]])
         self._static_coef = np.concatenate([self._mu_s, [p.mu_static * p.radius for p in pins]])
+        #: entries with friction data that is not identically zero (a coefficient or a constant resistance > 0)
+        self.carries_friction = np.concatenate([
+            (self._mu_s > 0) | (self._mu_k > 0) | (self._resistance > 0),
+            [p.mu_static > 0 or p.mu_kinetic > 0 or p.torque > 0 for p in pins]]).astype(bool)
 
     def static_limit(self, normal: Array) -> Array:
         """Largest force (torque) each contact (pin) can supply at rest: c R + mu_s |N| [N] for a contact,

@@ -157,11 +157,12 @@ class StickSlipSwitching:
         unit force A_i^T (A_i its velocity row; qdd from the constraints plus every stuck entry's row) drops to
         round-off (``CONSISTENCY_RTOL`` of its mobility without entry j held). All the friction entries of a
         one-degree-of-freedom mechanism come to rest together like that: which of them holds, and how much, is
-        statically indeterminate, and the exact treatment refuses it rather than pick one.
+        statically indeterminate, and the exact treatment refuses it rather than pick one. Entries whose friction
+        is identically zero carry no share and are not checked.
         """
         dyn = self.dyn
         stick, _ = dyn.phases(new, None)
-        sliding = [i for i in range(dyn.n_contacts) if not stick[i]]
+        sliding = [i for i in range(dyn.n_contacts) if not stick[i] and dyn.carries_friction[i]]
         if not sliding:
             return
         A, _ = dyn.rate_rows(q, qd)
