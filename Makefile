@@ -20,8 +20,9 @@ $(STAMP): requirements.lock pyproject.toml
 test: $(STAMP)
 	$(PY) -m pytest
 
-# Every study (cached cases are reused), then the report. Fails only if a case fails that its case list does not
-# expect to fail, or if the report cannot be built; what the checks find is written into the report.
+# Every study (cached cases are reused), then the report. Fails if a case fails that its case list does not
+# expect to fail, if a friction run breaks its energy balance (tables/energy_balance.csv), or if the report cannot
+# be built; what the checks find is written into the report.
 # WORKERS=N sets the local worker processes; SCHEDULER=tcp://host:8786 runs the cases on a Dask cluster.
 reproduce: $(STAMP)
 	$(PY) -m study reproduce $(if $(WORKERS),--workers $(WORKERS)) $(if $(SCHEDULER),--scheduler $(SCHEDULER))

@@ -204,7 +204,10 @@ def _run(args: argparse.Namespace) -> int:
         for name, error in cases.items():
             print(f"FAILED {name}: {error}", file=sys.stderr)
     broken = {s: r["summary_error"] for s, r in record["studies"].items() if r.get("summary_error")}
-    return 1 if failed or broken else 0
+    energy = record.get("energy_balance_flags", {})
+    for name, why in energy.items():
+        print(f"FAILED energy balance of {name}: {why}", file=sys.stderr)
+    return 1 if failed or broken or energy else 0
 
 
 def _record_root(args: argparse.Namespace) -> Path:

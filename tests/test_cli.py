@@ -27,7 +27,7 @@ def test_simulate_writes_result(tmp_path, capsys):
     (["--integrator", "Euler"], "invalid choice: 'Euler'"),
     (["--rtol", "0"], "rtol = 0.0 must be finite and > 0"),
     (["--t-end", "-1"], "--t-end = -1.0 must be finite and > 0"),
-    (["--variant", "nope"], "unknown variant (valid choices: seed, smooth_cutting, guide_friction)"),
+    (["--variant", "nope"], "unknown variant (valid choices: seed, smooth_cutting, guide_friction, slot_friction)"),
 ])
 def test_simulate_bad_input(tmp_path, capsys, args, message):
     code, err = _refused(capsys, ["simulate", "quick_return", *args, "--out", str(tmp_path / "x")])

@@ -199,7 +199,7 @@ def test_tables_are_byte_identical_across_runs_and_executors(tiny, tmp_path):
     b = pl.run_pipeline(tmp_path / "b", tmp_path / "cache_b", workers=2, folder=tiny, stream=open(os.devnull, "w"))
     assert a["studies"]["sliding_mode"]["computed"] == b["studies"]["sliding_mode"]["computed"] == 7
     ta, tb = _tables(tmp_path / "a"), _tables(tmp_path / "b")
-    assert set(ta) == {"sliding_mode_runs.csv", "sliding_mode_claims.csv", "failed_cases.csv"}
+    assert set(ta) == {"sliding_mode_runs.csv", "sliding_mode_claims.csv", "failed_cases.csv", "energy_balance.csv"}
     assert ta == tb
     assert (tmp_path / "a" / "timing" / "sliding_mode_timing.csv").exists()
     assert "cpu" not in ta["sliding_mode_runs.csv"].decode().splitlines()[0]

@@ -205,7 +205,8 @@ def test_case_lists_name_their_report_sections(tmp_path):
 
     assert report_sections(pl.load_case_lists()) == (
         "claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-        "work_precision", "benchmarks", "beyond_papers", "backends", "reproducibility")
+        "moving_friction", "work_precision", "benchmarks", "beyond_papers", "backends", "energy_balance",
+        "reproducibility")
     folder = tmp_path / "cases"
     folder.mkdir()
     (folder / "a.toml").write_text(TINY)

@@ -11,18 +11,27 @@ Cutting force on the ram along x (001 sec. 4, after Haug):
 ``on_off``: F_cut while v_D < 0 and x_min <= x_D <= x_max, else 0, with the switching functions
 (v_D, x_D - x_min, x_max - x_D); ``smooth``: F_cut s(-v_D/v_ramp) s((x_D - x_min)/x_ramp)
 s((x_max - x_D)/x_ramp), s(u) = (1 + tanh u)/2.
+
+Friction (``friction_at``): one of the two prismatic joints is a sliding contact with Coulomb friction, the ram guide
+(coefficient ``mu_guide``, the paper's data sets with mu_guide = 0, and 'guide_friction') or the rocker's slot
+(``mu_slot``, 'slot_friction': the block slides on the turning rocker, a moving guide); the other is a plain prismatic
+joint. One contact, not two with one coefficient zero: a frictionless contact would add its work to the state of every
+friction run (and so to an adaptive integrator's error norm), and the exact law would locate its stops too, at the
+ram's stroke ends, where holding it is a singular problem beside a sliding slot. A coefficient given for the joint
+that is not the contact is refused.
 """
 
 from __future__ import annotations
 
 import sympy as sp
 
-from study.model.joints import GROUND, Description, Friction
+from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterSet
 
 LABEL = "quick-return (paper 001)"
 PARAMETERS = ("l1", "l2", "l3", "m1", "m2", "m3", "m4", "m5", "a1", "a2", "a3", "J1", "J2", "J3", "J4", "J5",
-              "h1", "h2", "g", "mu_guide", "M", "F_cut", "x_cut_min", "x_cut_max", "v_ramp", "x_ramp", "cutting_law")
+              "h1", "h2", "g", "mu_guide", "mu_slot", "friction_at", "M", "F_cut", "x_cut_min", "x_cut_max", "v_ramp",
+              "x_ramp", "cutting_law")
 
 
 def _on(mode):
@@ -37,6 +46,11 @@ def _ramp(u):
 def describe(ps: ParameterSet) -> Description:
     """The joint-level description of the quick-return mechanism for one parameter set."""
     v = ps.values
+    plain = {"ram_guide": "mu_slot", "slot": "mu_guide"}[v.friction_at]
+    if getattr(v, plain) != 0:
+        raise DescriptionError(f"quick_return/{ps.variant}: {plain} = {getattr(v, plain)!r}, but friction_at = "
+                               f"{v.friction_at!r} makes that joint a plain prismatic joint (its coefficient would be "
+                               f"ignored): set {plain} = 0 or choose friction_at")
     d = Description("quick_return", ("q1", "q2", "q3"), {k: getattr(v, k) for k in PARAMETERS}, LABEL)
     p = d.p
     q1, q2, q3 = d.q
@@ -51,11 +65,12 @@ def describe(ps: ParameterSet) -> Description:
     d.revolute("O", (GROUND, "O"), ("crank", "O"))
     d.revolute("P", (GROUND, "P"), ("rocker", "P"))
     d.revolute("A", ("crank", "A"), ("block", "A"))
-    d.prismatic("block_on_rocker", slider=("block", "A"), guide=("rocker", "P"), axis=(1, 0), normal=(0, 1))
+    d.prismatic("block_on_rocker", slider=("block", "A"), guide=("rocker", "P"), axis=(1, 0), normal=(0, 1),
+                friction=Friction(p.mu_slot, p.mu_slot) if v.friction_at == "slot" else None)
     d.revolute("E", ("rocker", "E"), ("rod", "E"))
     d.revolute("D", ("rod", "D"), ("ram", "D"))
     d.prismatic("ram_guide", slider=("ram", "D"), guide=(GROUND, "ram_guide"), axis=(1, 0), normal=(0, -1),
-                friction=Friction(p.mu_guide, p.mu_guide))   # mu_guide = 0 except in 'guide_friction'
+                friction=Friction(p.mu_guide, p.mu_guide) if v.friction_at == "ram_guide" else None)
     d.gravity(p.g)
     d.torque("drive", "crank", p.M)
     x, _ = d.position("ram", "D")

@@ -16,7 +16,8 @@ from study.pipeline.cases import CASES_DIR, load_case_lists
 from study.pipeline.execute import run_cases
 from study.pipeline.executors import make_executor
 from study.pipeline.store import Store
-from study.pipeline.summaries import backend_agreement, backend_cpu, failures_table, summarize, summary_function
+from study.pipeline.summaries import (backend_agreement, backend_cpu, energy_balance, energy_flags, failures_table,
+                                      summarize, summary_function)
 from study.pipeline.tables import record_tables, table_record, write_tables
 
 PIPELINE_RECORD = "pipeline_record.json"  # what the last pipeline run did, in the cache root
@@ -55,6 +56,10 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     The record of the run (``pipeline_record.json``) and of the tables each study wrote (with their
     checksums, ``tables/<study>.json``) go to ``record_root`` (default: ``cache_root``); a run of another
     case folder must give its own, so the default record is never overwritten by it.
+
+    Every saved friction run's energy balance goes to ``tables/energy_balance.csv``
+    (:func:`study.pipeline.summaries.energy_check`); the runs it flags are printed and listed in the record under
+    ``energy_balance_flags`` (the ``run`` command then exits 1).
 
     Returns a record with the wall time per stage, the counts and the failures (for the manifest).
     """
@@ -114,6 +119,13 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
         for _, r in agreement[~agreement["agree"].astype(bool)].iterrows():   # a finding: said, never only tabulated
             print(f"compiled and reference path DISAGREE on {r['case']}: max|dq| {r['max_abs_dq']:.3g} rad > bound "
                   f"{r['bound']:.3g} ({r['rule']}); tables/backend_agreement.csv", file=stream)
+    ts = time.perf_counter()
+    balance = energy_balance(case_lists, store)
+    write_tables({"energy_balance": balance}, reports_dir)
+    record["energy_balance_flags"] = energy_flags(balance)
+    for name, why in record["energy_balance_flags"].items():
+        print(f"ENERGY BALANCE of {name}: {why}; tables/energy_balance.csv", file=stream)
+    record["stages"]["energy_balance"] = time.perf_counter() - ts
     save_record(record, record_root)
     return record
 

@@ -1,4 +1,5 @@
-"""What the pipeline computes from saved results: each study's summary and its own checks (failures, backend agreement)."""
+"""What the pipeline computes from saved results: each study's summary and its own checks (failures, backend agreement,
+the energy balance of every friction run)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import pandas as pd
 from study.pipeline.cases import CaseList, CaseListError
 from study.pipeline.store import Store
 from study.compare import common_samples
+from study.integrity import read_json
 from study.reference_data import tolerance
 from study.results import SimulationResult
 
@@ -114,3 +116,105 @@ def backend_cpu(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
                              "compiled_over_reference": fast / scaled if scaled > 0 else np.nan})
     return pd.DataFrame(rows, columns=["study", "case", "steps", "t_end", "compiled_cpu_s", "reference_t_end",
                                        "reference_cpu_s", "reference_cpu_scaled_s", "compiled_over_reference"])
+
+
+# --- the energy balance of every run with friction ---------------------------------------------------
+FRICTION_TREATMENTS = ("exact", "regularized", "sign")   # a result's meta['friction'] when friction was applied
+ENERGY_COLUMNS = ["study", "case", "engine", "friction", "integrator", "rtol", "atol", "step", "t_end",
+                  "energy_scale_J", "force_scale", "residual_J", "residual_bound_J", "dissipated_J",
+                  "largest_dissipation_decrease_J", "dissipation_bound_J", "judged", "residual_within_bound",
+                  "dissipation_nondecreasing", "flagged"]
+
+
+def dissipation(result: SimulationResult) -> np.ndarray:
+    """D(t) = -(sum of the ``work_friction_*`` series minus their initial values): the energy friction took out [J]."""
+    works = [np.asarray(v, dtype=float) - v[0] for k, v in result.energies.items() if k.startswith("work_friction_")]
+    return 0.0 - np.sum(works, axis=0) if works else np.zeros(len(result.t))   # 0.0 - x, not -x: D(0) = +0.0
+
+
+def energy_check(result: SimulationResult, options: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The energy balance of one friction run, its dissipation, and whether each is within its bound.
+
+    residual(t) = (K + V)(t) - (K + V)(0) - (work of the drives and loads) + (friction dissipation) is
+    :meth:`SimulationResult.energy_balance` minus its initial value (every ``work_*`` series, friction included); the
+    dissipation is D(t) (:func:`dissipation`). ``residual_J`` = max |residual|,
+    ``dissipated_J`` = D(t_end), ``largest_dissipation_decrease_J`` = the largest drop of D between two samples (0 if
+    it never drops).
+
+    Bounds, from the run's tolerances: an adaptive in-house run (meta ``rtol``) must keep the residual within
+    energy_drift_factor * (rtol * S + atol * (1 + Lambda)) (reference/tolerances.toml, reason there): S is the
+    largest |term| of the balance (K, V - V(0), each work), the energy the relative tolerance acts on; atol is the
+    absolute tolerance of every state, the work integrals (J) and the coordinates, whose error moves the energy by
+    the generalized forces, of the size of the largest multiplier Lambda (N or N m). Its dissipation may drop by
+    no more than that bound (a step's weights or the dense output between steps can be negative). A fixed-step
+    run (in-house RK4, Exudyn) has no tolerance: its residual is recorded, not judged, and its dissipation is a sum
+    of nonpositive powers with positive weights, so it may drop by round-off only, round_off * S. The residual of a
+    run started off its constraints (``options['initial'] == 'printed'``) is recorded, not judged: the projection
+    or the stabilization that brings it onto them changes the energy by construction; its dissipation is judged.
+    """
+    options = {} if options is None else dict(options)
+    e = result.energies
+    balance = result.energy_balance()
+    residual = float(np.max(np.abs(balance - balance[0]))) if balance.size else 0.0
+    dissipated = dissipation(result)
+    terms = [np.asarray(e.get("kinetic", np.zeros(1)), dtype=float)]
+    if "potential" in e:
+        terms.append(np.asarray(e["potential"], dtype=float) - e["potential"][0])
+    terms += [np.asarray(v, dtype=float) - v[0] for k, v in e.items() if k.startswith("work_")]
+    scale = max(float(np.max(np.abs(x))) for x in terms)
+    forces = float(np.max(np.abs(result.lam))) if result.lam.size else 0.0
+    drop = float(max(0.0, -np.min(np.diff(dissipated)))) if len(dissipated) > 1 else 0.0
+    rtol, atol = result.meta.get("rtol"), result.meta.get("atol")
+    adaptive = result.meta.get("engine") == "in-house" and rtol is not None
+    rule = "energy_drift_factor * (rtol * S + atol * (1 + Lambda))"
+    if adaptive:
+        bound = tolerance("energy_drift_factor") * (float(rtol) * scale + float(atol) * (1.0 + forces))
+        judged, drop_bound = rule, bound
+    else:
+        judged, bound = "residual not judged: fixed step, no tolerance; dissipation to round_off * S", float("nan")
+        drop_bound = tolerance("round_off") * scale
+    if options.get("initial") == "printed":
+        judged = (f"residual not judged: started off its constraints (printed state); dissipation to "
+                  f"{rule if adaptive else 'round_off * S'}")
+        bound = float("nan")
+    within = "not judged" if np.isnan(bound) else str(bool(residual <= bound))
+    nondecreasing = bool(drop <= drop_bound)
+    step = result.meta.get("step", result.meta.get("h"))
+    return {"engine": result.meta.get("engine"), "friction": result.meta.get("friction"),
+            "integrator": result.meta.get("integrator", result.meta.get("method")),
+            "rtol": np.nan if rtol is None else float(rtol), "atol": np.nan if atol is None else float(atol),
+            "step": np.nan if step is None else float(step), "t_end": float(result.t[-1]),
+            "energy_scale_J": scale, "force_scale": forces, "residual_J": residual, "residual_bound_J": bound,
+            "dissipated_J": float(dissipated[-1]) if len(dissipated) else 0.0,
+            "largest_dissipation_decrease_J": drop, "dissipation_bound_J": drop_bound, "judged": judged,
+            "residual_within_bound": within, "dissipation_nondecreasing": nondecreasing,
+            "flagged": within == "False" or not nondecreasing}
+
+
+def energy_balance(case_lists: Iterable[CaseList], store: Store) -> pd.DataFrame:
+    """:func:`energy_check` of every saved friction run of the case lists (their reference-path twins included)."""
+    rows, seen = [], set()
+    for cl in case_lists:
+        for case in cl.all_cases:
+            if case.key() in seen or not store.has(case):
+                continue
+            seen.add(case.key())
+            if read_json(store.file(case, ".json"))["meta"].get("friction") not in FRICTION_TREATMENTS:
+                continue   # the sidecar (checked by store.has) tells; the series are read for friction runs only
+            rows.append({"study": cl.study, "case": case.name, **energy_check(store.load(case), case.kwargs)})
+    return pd.DataFrame(rows, columns=ENERGY_COLUMNS)
+
+
+def energy_flags(table: pd.DataFrame) -> dict[str, str]:
+    """The flagged runs of an energy-balance table: case name -> what is wrong, with its numbers."""
+    out = {}
+    for _, r in table[table["flagged"].astype(str) == "True"].iterrows():
+        why = []
+        if str(r["residual_within_bound"]) == "False":
+            why.append(f"energy-balance residual {r['residual_J']:.3g} J above its bound {r['residual_bound_J']:.3g} J "
+                       f"({r['judged']})")
+        if str(r["dissipation_nondecreasing"]) != "True":
+            why.append(f"friction dissipation drops by {r['largest_dissipation_decrease_J']:.3g} J between two samples "
+                       f"(allowed {r['dissipation_bound_J']:.3g} J): the friction did positive work")
+        out[str(r["case"])] = "; ".join(why)
+    return out

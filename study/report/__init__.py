@@ -43,7 +43,7 @@ __all__ = ["FIXED_SECTIONS", "build_report", "report_sections"]
 # report. Every other section is named by a case list ([study] section, section_order), so a new
 # study is a case list plus a section module.
 FIXED_SECTIONS = {"claims": 10.0, "initial": 20.0, "errata": 30.0, "benchmarks": 90.0, "backends": 105.0,
-                  "reproducibility": 110.0}
+                  "energy_balance": 107.0, "reproducibility": 110.0}
 
 
 def section_module(name: str) -> str:
