@@ -74,9 +74,10 @@ def _contact_name(mechanism: str, variant: str) -> str | None:
     return contacts[0].name if contacts else None
 
 
-def tangential_force(result: SimulationResult) -> Array | None:
-    """The guide's whole tangential force on the sliding body [N] (None without friction)."""
-    name = contact_name(result)
+def tangential_force(result: SimulationResult, name: str | None = None) -> Array | None:
+    """The whole tangential force of contact ``name`` (default: the first) on the sliding body [N], or a pin's whole
+    friction torque [N m] (None without friction)."""
+    name = contact_name(result) if name is None else name
     if name is None or f"friction_{name}" not in result.forces:
         return None
     total = np.asarray(result.forces[f"friction_{name}"], dtype=float)
@@ -85,9 +86,10 @@ def tangential_force(result: SimulationResult) -> Array | None:
     return total
 
 
-def normal_force(result: SimulationResult) -> Array | None:
-    """The guide's normal force (-lambda of the contact row) [N]; None without a contact."""
-    name = contact_name(result)
+def normal_force(result: SimulationResult, name: str | None = None) -> Array | None:
+    """The normal force (-lambda of the contact row) of contact ``name`` (default: the first) [N], or a pin's |R|;
+    None without a contact."""
+    name = contact_name(result) if name is None else name
     if name is None:
         return None
     if f"normal_{name}" in result.forces:

@@ -52,7 +52,7 @@ from study.pipeline import Case
 from study.pipeline.summaries import dissipation, energy_check, sample_agreement
 from study.reference_data import tolerance
 from study.results import SimulationResult
-from study.studies.cross_validation import deviations
+from study.studies.cross_validation import deviations, normal_force, tangential_force
 
 ROLES = ("exact", "regularized", "exudyn", "eps")
 Load = Callable[[Case], SimulationResult]
@@ -207,8 +207,12 @@ def forces_table(groups: dict, load: Load) -> pd.DataFrame:
 
 
 def _compare(run: SimulationResult, ref: SimulationResult) -> dict:
+    """max|dq|, max|dqd|, and max|dF|, max|dN| over every friction entry (a pin's torque [N m] and |R| [N])."""
     d = deviations(run, ref)
     ia, ib = common_samples(run, ref)
+    names = [name for name, _ in contacts(ref.meta["mechanism"], ref.meta["variant"])]
+    for key, force in (("max_abs_dF_friction", tangential_force), ("max_abs_dN", normal_force)):
+        d[key] = max(float(np.abs(force(run, n)[ia] - force(ref, n)[ib]).max()) for n in names)
     return {**{k: d[k] for k in DIFFERENCES[:4]},
             "abs_ddissipated_J": float(abs(dissipation(run)[ia][-1] - dissipation(ref)[ib][-1]))}
 

@@ -93,7 +93,7 @@ def convergence_figure(exudyn: pd.DataFrame, eps: pd.DataFrame, title: str) -> F
             continue
         series = [("max|Δq| [rad]", frame[x], frame["max_abs_dq"], {"color": "tab:blue"}),
                   ("max|Δq̇| [rad/s]", frame[x], frame["max_abs_dqd"], {"color": "tab:orange"}),
-                  ("max|ΔF| [N]", frame[x], frame["max_abs_dF_friction"], {"color": "tab:green"}),
+                  ("max|ΔF| [N; N m for a pin]", frame[x], frame["max_abs_dF_friction"], {"color": "tab:green"}),
                   ("|ΔD(t_end)| [J]", frame[x], frame["abs_ddissipated_J"], {"color": "tab:purple"})]
         xs = np.sort(frame[x].to_numpy(dtype=float))
         top = 3.0 * float(frame[["max_abs_dq", "max_abs_dqd", "max_abs_dF_friction", "abs_ddissipated_J"]].max().max())
@@ -140,7 +140,7 @@ def _orders_table(frame: pd.DataFrame, x: str, header: str) -> str:
     for _, r in frame.iterrows():
         values = [r[x]] + [r[d] for d in mf.DIFFERENCES]
         rows.append([fmt_number(v) for v in values] + [fmt_number(r[f"order_{c}"], 4) for c, _ in ORDER_COLUMNS])
-    head = [header, "max|Δq| [rad]", "max|Δq̇| [rad/s]", "max|ΔF| [N]", "max|ΔN| [N]", "|ΔD(t_end)| [J]"]
+    head = [header, "max|Δq| [rad]", "max|Δq̇| [rad/s]", "max|ΔF| [N; N m for a pin]", "max|ΔN| [N]", "|ΔD(t_end)| [J]"]
     head += [f"order {name}" for _, name in ORDER_COLUMNS]
     return md_table(head, rows, [True] * len(head))
 
