@@ -12,7 +12,7 @@ from threadpoolctl import threadpool_limits
 from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
-from study.fast.support import SCIPY_STEPS_ONLY, check_no_pin_friction, check_supported
+from study.fast.support import SCIPY_STEPS_ONLY, check_supported
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
@@ -145,8 +145,7 @@ def simulate(
         forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
         Revolute joints with friction (``Description.revolute(..., friction=, radius=)``) follow the contacts in
         these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque on the joint's first body
-        [N m], ``friction_eps`` read in rad/s); they take 'regularized' or 'sign' on backend 'reference' only:
-        'exact' and backend='compiled' are refused.
+        [N m], ``friction_eps`` read in rad/s), with every treatment on both backends.
     resistance_reading : {None, 'holds', 'sliding_only'}
         Whether a contact's constant resistance counts in the static limit of the 'exact' treatment
         (``study.solver.friction.RESISTANCE_READINGS``). None: the parameter set's
@@ -195,8 +194,6 @@ def simulate(
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, mech = resolve(eom_or_mechanism, variant)
-    if backend == "compiled":
-        check_no_pin_friction(eom, friction)
     ps = None if mech is None else mech.parameters
     index3 = integrator == INDEX3
     if index3 and eom.indicators is not None:

@@ -319,20 +319,6 @@ def test_exact_pin_energy_balance(exact):
     assert residual <= scale
 
 
-def test_compiled_is_refused_by_name(mech):
-    with pytest.raises(ValueError, match=r"backend='compiled' is not implemented for revolute joints with friction "
-                                         r"\('pin' of 'pin_friction_pendulum'\)"):
-        study.simulate(mech, t_end=0.1, friction="regularized", backend="compiled")
-
-
-def test_compiled_entry_points_refuse_pin_friction(mech):
-    from study.fast.support import check_no_pin_friction
-
-    eom = mech.equations()
-    check_no_pin_friction(eom, None)     # friction off: the pins' data is ignored, as the contacts' is
-    with pytest.raises(ValueError, match=r"backend='compiled' is not implemented for revolute joints with friction "
-                                         r"\('pin' of 'pin_friction_pendulum'\)"):
-        check_no_pin_friction(eom, "regularized")
 
 
 def test_unconverged_torque_solve_names_joint_time_and_state(mech, monkeypatch):
@@ -366,7 +352,6 @@ def test_description_errors(mech):
         lower(describe(ps, radius=False))
     with pytest.raises(DescriptionError, match=r"'pin' has friction \(a cut joint"):
         lower(describe(ps, relative=True))
-
 
 
 def test_pin_between_two_moving_bodies_dissipates_its_work():

@@ -6,7 +6,8 @@ through one common-subexpression elimination and written as ``@njit(cache=True)`
 take the parameter vector ``p`` (same order as ``PARAMETERS``) and fill caller-owned arrays:
 
 - ``evaluate``: M, Q = applied loads - C(q, qd) qd - dV/dq, Phi, Phi_q, gamma, the contacts' tangent
-  Jacobians and biases, and the power of each applied load;
+  Jacobians and biases followed by those of the revolute joints with friction (their rate Jacobians P and
+  biases Pdot qd: rows nc.. of Jt and bt), and the power of each applied load;
 - ``indicators``: switching functions of the discontinuous loads (signs = the load mode);
 - ``kinematics``: Phi, Phi_q and M (for the post-step projection).
 
@@ -82,6 +83,10 @@ def _evaluate(b, eqs: SymbolicEquations, params) -> list[str]:
         for j in range(m):
             targets.append((f"Jt[{k}, {j}]", eqs.contact_jacobians[c.name][0, j]))
         targets.append((f"bt[{k}]", eqs.contact_bias[c.name]))
+    for k, pin in enumerate(b.pin_frictions, start=len(b.contacts)):   # P and Pdot qd of omega_a - omega_b
+        for j in range(m):
+            targets.append((f"Jt[{k}, {j}]", eqs.pin_jacobians[pin.name][0, j]))
+        targets.append((f"bt[{k}]", eqs.pin_bias[pin.name]))
     for k, g in enumerate(eqs.loads.values()):   # the power of each load, in the reference's work order
         targets.append((f"powers[{k}]", sum((g[j] * b.qd[j] for j in range(m)), sp.Integer(0))))
     cse_lines, printed = _cse_block([e for _, e in targets])

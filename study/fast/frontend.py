@@ -4,8 +4,8 @@
 mechanisms (kernels generated from their description) and a user's EquationsOfMotion whose callables
 numba compiles (:mod:`study.fast.user`, which names what it cannot compile), the ``multiplier`` acceleration solver,
 every stabilization (none, baumgarte, sliding_mode with every sgn approximation, projection),
-friction None / 'regularized' / 'sign' / 'exact', and the integrators RK23, RK45, DOP853 (scipy's
-error control) and RK4. Anything else raises a ValueError naming the option: there is no silent
+friction None / 'regularized' / 'sign' / 'exact' in sliding contacts and revolute joints, and the integrators RK23,
+RK45, DOP853 (scipy's error control) and RK4. Anything else raises a ValueError naming the option: there is no silent
 fallback. Switches are located in the compiled loop; the new mode is set here (loads: the crossing
 entry flips; exact friction: ``study.solver.friction.StickSlipSwitching.on_event``, the reference
 rule), then the next segment starts. Samples are post-processed by the reference
@@ -29,12 +29,12 @@ from study.fast.cache import compile_lock
 from study.fast.codegen import generated_module
 
 with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
-    from study.fast.dynamics import accelerations_entry, no_phases, rhs_entry
+    from study.fast.dynamics import PIN_NOT_CONVERGED, accelerations_entry, no_phases, rhs_entry
     from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
                                  FAIL_STALL, FAIL_STEP, integrate_segment)
 from study.fast.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
-from study.fast.support import METHOD_IDS, check_no_pin_friction, check_supported
+from study.fast.support import METHOD_IDS, check_supported
 from study.model.eom import EquationsOfMotion
 from study.mechanisms import Mechanism
 from study.model.coordinates import lower
@@ -119,19 +119,29 @@ def compiled_phases(dyn: Dynamics):
     return no_phases if law is None else law.compiled_phases
 
 
+def pin_numbers(dyn: Dynamics) -> tuple[float, float]:
+    """(delta [N] of |R|_delta, relative tolerance of the torques' Newton solve) of the run's pins: the reference
+    dynamics' own values (``FrictionDynamics``; zeros without friction or pins, where the kernels read neither)."""
+    return getattr(dyn, "pin_numbers", (0.0, 0.0))
+
+
 def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,
-                 n_load_modes: int) -> tuple[np.ndarray, np.ndarray]:
-    """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``."""
+                 n_load_modes: int, pin_numbers: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``; ``pin_numbers``: see :func:`pin_numbers`."""
     r, nc = eom.n_constraints, len(eom.contacts)
+    pins = tuple(getattr(eom, "pin_frictions", ()))
     s = stabilization
     cf = [getattr(s, "tol", 0.0)]
     cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
     cf += [c.resistance for c in eom.contacts]
+    cf += [p.mu_static * p.radius for p in pins] + [p.mu_kinetic * p.radius for p in pins] + [p.torque for p in pins]
+    cf += [float(x) for x in pin_numbers]
     bias_offset = len(cf)
     cf += [float(x) for x in s.compiled_parameters(r)]
     ci = [int(s.projects), bias_offset, int(law is not None), int(law is not None and law.switched), len(cf),
           int(getattr(s, "weighting", "") == "mass"), int(getattr(s, "max_iter", 0)), n_load_modes]
-    ci += [c.constraint_index for c in eom.contacts] + [n_work, nc, r, eom.n_coordinates]
+    ci += [c.constraint_index for c in eom.contacts] + [k for p in pins for k in p.rows]
+    ci += [len(pins), n_work, nc, r, eom.n_coordinates]
     if law is not None:
         cf += [float(x) for x in law.compiled_parameters()]
     return np.array(ci, dtype=np.int64), np.array(cf, dtype=float)
@@ -178,7 +188,7 @@ def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
     if law is not None and dyn.n_load_modes != n_load:
         raise ValueError(f"backend='compiled': {dyn.n_load_modes} load switching functions in the equations, "
                          f"{n_load} in the compiled description")
-    return (model, *pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load))
+    return (model, *pack_options(eom, dyn.stabilization, law, len(dyn.work_names), n_load, pin_numbers(dyn)))
 
 
 class FunctionAddress(WrapperAddressProtocol):
@@ -211,7 +221,6 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
     Same signature (t, y, mode) and the same count of evaluations in ``dyn.nfev``. Where the compiled solve fails,
     the reference ``dyn.rhs`` is evaluated at that state so that its error (singular system, Painleve case) is
     the one raised; if the reference succeeds there, the disagreement itself is raised."""
-    check_no_pin_friction(eom, getattr(dyn, "law", None))
     model, ci, cf = _pack(eom, mechanism, dyn)
     evaluate, bias = FunctionAddress(model.module.evaluate, EVALUATE), FunctionAddress(compiled_bias(dyn.stabilization), BIAS)
     phases = FunctionAddress(compiled_phases(dyn), PHASES)
@@ -233,15 +242,29 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
 
 
 def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.ndarray:
-    """[qdd, lambda, N, f] at one state from the compiled kernels (``repeat`` times, for timing)."""
-    m, r, nc = s.dyn.eom.n_coordinates, s.dyn.eom.n_constraints, len(s.dyn.eom.contacts)
-    out = np.zeros(m + r + 2 * nc)
+    """[qdd, lambda, N, f] at one state from the compiled kernels (``repeat`` times, for timing); N and f list the
+    sliding contacts, then the revolute joints with friction (|R| [N], the torque [N m])."""
+    eom = s.dyn.eom
+    m, r = eom.n_coordinates, eom.n_constraints
+    nt = len(eom.contacts) + len(getattr(eom, "pin_frictions", ()))
+    out = np.zeros(m + r + 2 * nt)
     status = accelerations_entry(s.model.module.evaluate, s.bias, s.phases, float(t),
                                  np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
                                  np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
+    if status == PIN_NOT_CONVERGED:
+        _pin_failure(s.dyn, t, q, qd, mode)
     if status != 0:
         raise RuntimeError(f"compiled acceleration solve failed at t = {t}: {_FAILURES[FAIL_RHS]}")
     return out
+
+
+def _pin_failure(dyn: Dynamics, t: float, q, qd, mode) -> None:
+    """Raise the reference's PinFrictionError of a state where the compiled Newton solve of the pins' torques did not
+    converge (the reference solve at that state raises it, with its iterations in the message); if the reference
+    converges there, the disagreement is raised."""
+    dyn.contact_solution(float(t), np.asarray(q, dtype=float), np.asarray(qd, dtype=float), tuple(mode) or None)
+    raise RuntimeError(f"compiled solve of the revolute joints' friction torques did not converge at t = {t:.9g} s "
+                       f"where the reference solve converges; rerun with backend='reference'")
 
 
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,
@@ -268,7 +291,7 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     n_mode = len(mode)
     y_out = np.zeros((len(t_out), len(s.y0)))
     mode_out = np.zeros((len(t_out), max(n_mode, 1)), dtype=np.int64)
-    counters = np.array([0, 0, 0, 0, 1, 0], dtype=np.int64)
+    counters = np.array([0, 0, 0, 0, 1, 0, 0], dtype=np.int64)
     bounds = np.array([float(max_evaluations), float(min_step), float(tolerance("min_step_run"))])
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
@@ -301,6 +324,8 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
                                  f"there; likely causes: a step too large for the solution (RK4), non-finite "
                                  f"forces, or a singular configuration", t=float(t_reached),
                                  quantity="rhs")
+        if outcome == FAIL_RHS and counters[6] == PIN_NOT_CONVERGED:
+            _pin_failure(s.dyn, t_reached, y_end[:m], y_end[m:2 * m], mode)
         if outcome < 0:
             raise RuntimeError(f"{integrator} (compiled) failed at t = {t_reached:.9g}: {_FAILURES[outcome]}; "
                                f"rerun with backend='reference' for a diagnosis")
@@ -331,7 +356,6 @@ def simulate_compiled(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, q
     """The compiled backend of ``study.simulate.simulate`` (arguments already checked there; what the compiled
     backend supports again here, for a direct call)."""
     check_supported(integrator, acceleration_solver, progress)
-    check_no_pin_friction(eom, friction)
     s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
     cpu0 = time.process_time()

@@ -19,12 +19,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
-from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, accelerations, dimensions, rhs,
-                                 workspace)
+from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, accelerations,
+                                 dimensions, note_failure, pin_block, rhs, workspace)
 from study.fast.project import project
 from study.fast.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
+from study.solver.friction.laws import friction_level  # a stuck entry's limit, as the reference
 from study.solver.integrate import BRENT_RTOL, BRENT_XTOL, SCAN_POINTS  # as the reference loop
 
 # segment outcomes (>= 0) and failures (< 0)
@@ -41,7 +42,7 @@ SEGMENT = types.Tuple((i8, f8, i8))(
 
 @njit(cache=True)
 def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, ws, out):
-    """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact)."""
+    """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact, then 2 per pin)."""
     m, nlm = ws.q.size, ci[CI_NLOADMODE]
     for i in range(m):
         ws.q[i] = y[i]
@@ -51,12 +52,19 @@ def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, 
     if ci[CI_SWITCHED] == 0:
         return 0
     status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
-    nc = ws.Jt.shape[0]
-    off = CF_HEADER
-    for j in range(nc):
+    if status != 0:
+        note_failure(ws, status, t)
+    npin = dimensions(ci)[4]
+    nc = ws.Jt.shape[0] - npin
+    off, po = CF_HEADER, pin_block(nc)
+    for j in range(nc + npin):
         direction = float(mode[nlm + 2 * j + 1])
-        if mode[nlm + 2 * j] > 0:  # stick: R + mu_s |N| - |f|
-            out[nlm + 2 * j] = cf[off + 2 * nc + j] + cf[off + nc + j] * abs(ws.normal[j]) - abs(ws.f[j])
+        if mode[nlm + 2 * j] > 0 and j < nc:  # stuck contact: R + mu_s |N| - |f|
+            out[nlm + 2 * j] = friction_level(cf[off + nc + j], ws.normal[j], cf[off + 2 * nc + j]) - abs(ws.f[j])
+        elif mode[nlm + 2 * j] > 0:           # stuck pin: mu_s r |R|_delta + T0 - |tau|
+            k = j - nc
+            out[nlm + 2 * j] = friction_level(cf[po + k], ws.pin[PIN_NORM * npin + k], cf[po + 2 * npin + k]) \
+                - abs(ws.f[j])
         else:
             out[nlm + 2 * j] = -direction * ws.vt[j]
         out[nlm + 2 * j + 1] = direction
@@ -169,6 +177,17 @@ def _store(kinematics, t, y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, coun
 
 
 @njit(cache=True)
+def _rhs_failed(ws, y_end, counters):
+    """FAIL_RHS at the time of the failing evaluation; its q, qd to y_end[:2m] and its status to counters[6]."""
+    m = ws.q.size
+    for i in range(m):
+        y_end[i] = ws.q[i]
+        y_end[m + i] = ws.qd[i]
+    counters[6] = ws.counters[1]
+    return FAIL_RHS, ws.at[0], -1
+
+
+@njit(cache=True)
 def _due(t_out, k, t_hi):
     return k < t_out.size and (t_out[k] < t_hi or abs(t_out[k] - t_hi) <= SAMPLE_ATOL * max(1.0, abs(t_hi)))
 
@@ -179,17 +198,17 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
 
     counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0), accepted steps in a row
-    below min_step]; updated in place. bounds: [max_evaluations, min_step, min_step_run], the reference
-    loop's run bounds (``study.solver.integrate.integrate``): the run fails with FAIL_EVALUATIONS once the
-    evaluations of the whole run reach max_evaluations, and with FAIL_STALL after min_step_run accepted
-    adaptive steps in a row shorter than min_step.
+    below min_step, status of a failing evaluation]; updated in place. bounds: [max_evaluations, min_step,
+    min_step_run], the reference loop's run bounds (``study.solver.integrate.integrate``): the run fails with
+    FAIL_EVALUATIONS once the evaluations of the whole run reach max_evaluations, and with FAIL_STALL after
+    min_step_run accepted adaptive steps in a row shorter than min_step.
     Returns (outcome, t reached, index of the switching function that crossed or -1); the state
-    reached is written to y_end.
+    reached is written to y_end (FAIL_RHS: the time and the q, qd of the failing evaluation).
     """
     n = y0.size
-    m, r, nc, nw = dimensions(ci)
-    ws = workspace(m, r, nc, nw)
-    n_events = ci[CI_NLOADMODE] + (2 * nc if ci[CI_SWITCHED] == 1 else 0)
+    m, r, nc, nw, npin = dimensions(ci)
+    ws = workspace(m, r, nc, nw, npin)
+    n_events = ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
     projecting = ci[CI_PROJECTS] == 1
     n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
     K = np.zeros((max(n_k, 4), n))
@@ -198,7 +217,7 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
     g_new, g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
     t = t0
     if rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, f) != 0:
-        return FAIL_RHS, t, -1
+        return _rhs_failed(ws, y_end, counters)
     if counters[4] == 1:
         counters[4] = 0
         while _due(t_out, counters[0], t):
@@ -212,7 +231,7 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
         h_abs, status = select_initial_step(evaluate, bias, phases, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci,
                                             cf, ws, tmp, f_new)
         if status != 0:
-            return FAIL_RHS, t, -1
+            return _rhs_failed(ws, y_end, counters)
     exponent = -1.0 / (order + 1)
     while t < t_end:
         t_old = t
@@ -222,11 +241,11 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
             for i in range(n):
                 K[0, i] = f[i]
             if stages(evaluate, bias, phases, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
-                return FAIL_RHS, t, -1
+                return _rhs_failed(ws, y_end, counters)
             combine(tab, 4, y, h, K, y_new)
             t_new = t + h
             if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                return FAIL_RHS, t, -1
+                return _rhs_failed(ws, y_end, counters)
         else:
             min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
             rejected = False
@@ -243,10 +262,10 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
                     K[0, i] = f[i]
                 if stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws,
                           tmp) != 0:
-                    return FAIL_RHS, t, -1
+                    return _rhs_failed(ws, y_end, counters)
                 combine(tab, n_stages, y, h, K, y_new)
                 if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                    return FAIL_RHS, t, -1
+                    return _rhs_failed(ws, y_end, counters)
                 for i in range(n):
                     K[n_stages, i] = f_new[i]
                 err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
@@ -276,7 +295,7 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
         # --- 1. switches ----------------------------------------------------------------------
         if n_events > 0:
             if event_values(evaluate, bias, phases, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
-                return FAIL_RHS, t, -1
+                return _rhs_failed(ws, y_end, counters)
             t_e, i_e = np.inf, -1
             for i in range(n_events):
                 if g_new[i] * mode[i] < 0:
@@ -318,7 +337,7 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
             if changed:
                 counters[3] += 1
                 if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                    return FAIL_RHS, t, -1
+                    return _rhs_failed(ws, y_end, counters)
         t = t_new
         for i in range(n):
             y[i] = y_new[i]

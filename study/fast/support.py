@@ -29,13 +29,3 @@ def check_supported(integrator: str, acceleration_solver: str, progress=None) ->
         problems.append("progress= (the compiled loop does not call back into Python)")
     if problems:
         raise ValueError("backend='compiled' does not support " + "; ".join(problems) + "; use backend='reference'")
-
-
-def check_no_pin_friction(eom, friction) -> None:
-    """ValueError if friction is on and the equations have revolute joints with friction: the compiled kernels
-    implement the sliding contacts' friction only (refused, never silently left out)."""
-    pins = tuple(p.name for p in getattr(eom, "pin_frictions", ())) if friction is not None else ()
-    if pins:
-        raise ValueError(f"backend='compiled' is not implemented for revolute joints with friction "
-                         f"({', '.join(map(repr, pins))} of {eom.name!r}): use friction='regularized' or 'sign' on "
-                         f"backend='reference'")

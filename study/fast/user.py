@@ -8,7 +8,7 @@ subset of Python and NumPy that numba compiles (numbers, arrays and math; closur
 numbers, not over objects). Anything else is refused with one message that says why and names
 ``backend='reference'``, which runs every EquationsOfMotion: there is no silent fallback.
 
-Not compiled (refused by name): sliding contacts with friction, switching loads (``indicators``)
+Not compiled (refused by name): sliding contacts and revolute joints with friction, switching loads (``indicators``)
 and applied loads whose work is tracked (``applied_forces``); their kernels need the description's
 point kinematics.
 """
@@ -53,6 +53,8 @@ def unsupported(eom: EquationsOfMotion) -> list[str]:
     out = []
     if eom.contacts:
         out.append(f"{len(eom.contacts)} sliding contact(s) with friction")
+    if eom.pin_frictions:
+        out.append(f"{len(eom.pin_frictions)} revolute joint(s) with friction")
     if eom.indicators is not None:
         out.append("switching loads (indicators)")
     if eom.applied_forces is not _no_forces:

@@ -49,6 +49,8 @@ def description_key(b: MechanismBuilder) -> str:
     parts += [sp.srepr(x) for x in b.switches]
     parts += [sp.srepr((c.name, c.point.name, c.normal, c.tangent, c.mu_static, c.mu_kinetic, c.resistance,
                         c.guide.name if c.guide else None)) for c in b.contacts]
+    parts += [sp.srepr((x.name, x.rows, x.body_a.name if x.body_a else None, x.body_b.name if x.body_b else None,
+                        x.mu_static, x.mu_kinetic, x.radius, x.torque)) for x in b.pin_frictions]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 

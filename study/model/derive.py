@@ -14,6 +14,9 @@ generalized forces J_p^T f (a force f at point p) and j_i^T tau (a torque on bod
 A sliding contact's tangential velocity is v_t = J_t qd, its rate J_t qdd + b_t with b_t = Jdot_t qd:
 J_t = t . J_p on a guide fixed in ground; on a moving guide G, J_t = t(q) . (J_p - J_G*) with
 J_G* qd = v_G + omega_G k x (r_p - r_G) the velocity of G's material point at the contact point.
+
+A revolute joint with friction (a pin between bodies a and b, either may be ground) has the relative rate
+omega = P qd, P = j_a - j_b (ground: 0), and its rate P qdd + Pdot qd.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ class SymbolicEquations:
     indicators: sp.Matrix                       # (k, 1)  switching functions of the loads
     contact_jacobians: dict[str, sp.Matrix] = None   # (1, m)  J_t of every sliding contact
     contact_bias: dict[str, sp.Expr] = None          # Jdot_t qd of every sliding contact
+    pin_jacobians: dict[str, sp.Matrix] = None       # (1, m)  P of every revolute joint with friction
+    pin_bias: dict[str, sp.Expr] = None              # Pdot qd of every revolute joint with friction
 
 
 def _bias(jac: sp.Matrix, q: sp.Matrix, qd: sp.Matrix) -> sp.Matrix:
@@ -99,6 +104,14 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         jt = (sp.Matrix([list(c.tangent)]) * (jac - coincident)).applyfunc(sp.expand)
         contact_jacobians[c.name] = jt
         contact_bias[c.name] = sp.expand(_bias(jt, q, qd)[0])
+    pin_jacobians, pin_bias = {}, {}
+    for pin in b.pin_frictions:
+        jac = sp.zeros(1, m)
+        for body, sign in ((pin.body_a, 1), (pin.body_b, -1)):
+            if body is not None:
+                jac += sign * angle_jacobians[body.name]
+        pin_jacobians[pin.name] = jac
+        pin_bias[pin.name] = _bias(jac, q, qd)[0]
     return SymbolicEquations(
         mass=mass,
         velocity_terms=vel,
@@ -115,4 +128,6 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         indicators=indicators,
         contact_jacobians=contact_jacobians,
         contact_bias=contact_bias,
+        pin_jacobians=pin_jacobians,
+        pin_bias=pin_bias,
     )

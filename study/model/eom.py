@@ -109,7 +109,7 @@ class EquationsOfMotion:
     contacts : sequence of SlidingContact
         Sliding joints with Coulomb friction (optional).
     pin_frictions : sequence of PinFriction
-        Revolute joints with Coulomb friction (optional; reference backend, 'regularized' and 'sign').
+        Revolute joints with Coulomb friction (optional; a user's equations run them on backend 'reference' only).
     potential_energy : callable (q) -> float, optional
         Potential of the conservative loads included in ``forces`` (gravity, springs).
     applied_forces : callable (t, q, qd[, mode]) -> dict[str, (m,)], optional

@@ -37,7 +37,8 @@ sliding pins' tau affinely (R = R_0 + L tau, L their unit-torque responses) and 
 system tau = g(tau) is solved by Newton (``pin_friction_solve_rtol``), around the contacts' solve above, which is
 repeated at every iterate. s_p is the treatment's slip factor of omega_p [rad/s] ('regularized', 'sign'; the width
 friction_eps read in rad/s) or the mode's frozen direction ('exact'). A stuck pin holds while |tau_p| <=
-mu_s,p r_p |R_p|_delta + c T0_p (c as for a contact's resistance, ``RESISTANCE_READINGS``). The pins follow the
+mu_s,p r_p |R_p|_delta + T0_p (its constant torque always holds; the readings of ``RESISTANCE_READINGS`` are paper
+000's reading of a slider's resistance). The pins follow the
 contacts in every per-contact output and in the exact treatment's mode (``normal_<pin>`` = |R| [N],
 ``friction_<pin>`` = tau [N m], ``v_t`` = omega [rad/s], ``work_friction_<pin>`` = its work).
 """
@@ -51,7 +52,7 @@ import numpy as np
 
 from study.reference_data import tolerance
 from study.solver.dynamics import Dynamics
-from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb
+from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb, friction_level, pin_norm
 
 Array = np.ndarray
 
@@ -151,22 +152,28 @@ class FrictionDynamics(Dynamics):
         self._mu_k = np.array([c.mu_kinetic for c in self.eom.contacts])
         self._mu_s = np.array([c.mu_static for c in self.eom.contacts])
         self._resistance = np.array([c.resistance for c in self.eom.contacts])
-        # static limit per entry (contacts, then pins): the part of R (T0) that holds (the exact law's reading) plus
-        # mu_s |N| (mu_s r |R|_delta)
+        # static limit per entry (contacts, then pins): the part of R that holds (the exact law's reading), or a pin's
+        # whole T0, plus mu_s |N| (mu_s r |R|_delta)
         fraction = getattr(self.law, "static_resistance_fraction", 1.0)
-        self._static_resistance = fraction * np.concatenate([self._resistance, [p.torque for p in pins]])
+        self._static_resistance = np.concatenate([fraction * self._resistance, [p.torque for p in pins]])
         self._static_coef = np.concatenate([self._mu_s, [p.mu_static * p.radius for p in pins]])
         #: entries with friction data that is not identically zero (a coefficient or a constant resistance > 0)
         self.carries_friction = np.concatenate([
             (self._mu_s > 0) | (self._mu_k > 0) | (self._resistance > 0),
             [p.mu_static > 0 or p.mu_kinetic > 0 or p.torque > 0 for p in pins]]).astype(bool)
 
+    @property
+    def pin_numbers(self) -> tuple[float, float]:
+        """(delta [N] of |R|_delta, relative tolerance of the pins' torque solve); zeros without pins."""
+        return (self._pin_delta, self._pin_rtol) if self._pins else (0.0, 0.0)
+
     def static_limit(self, normal: Array) -> Array:
         """Largest force (torque) each contact (pin) can supply at rest: c R + mu_s |N| [N] for a contact,
-        c T0 + mu_s r |R|_delta [N m] for a pin (``normal``: the per-entry outputs; see ``RESISTANCE_READINGS``)."""
+        T0 + mu_s r |R|_delta [N m] for a pin (``normal``: the per-entry outputs; see ``RESISTANCE_READINGS``)."""
         n = np.abs(np.asarray(normal, dtype=float))
-        n[self._nc:] = np.sqrt(n[self._nc:] ** 2 + (self._pin_delta ** 2 if self._pins else 0.0))
-        return self._static_resistance + self._static_coef * n
+        if self._pins:
+            n[self._nc:] = pin_norm.py_func(n[self._nc:], 0.0, self._pin_delta)
+        return friction_level.py_func(self._static_coef, n, self._static_resistance)
 
     def rate_rows(self, q: Array, qd: Array) -> tuple[Array, Array]:
         """(A (n, m), b (n,)): each entry's velocity A_j qd and rate A_j qdd + b_j, contacts (J_t, tangent bias)
@@ -256,8 +263,8 @@ class FrictionDynamics(Dynamics):
             except np.linalg.LinAlgError:
                 self._singular_hold(t, held)
             R = sol.lam[rows]                  # (np, 2)
-            norm = np.sqrt(np.sum(R ** 2, axis=1) + self._pin_delta ** 2)
-            level = coef * norm[free] + torque
+            norm = pin_norm.py_func(R[:, 0], R[:, 1], self._pin_delta)
+            level = friction_level.py_func(coef, norm[free], torque)
             F = tau_f + level * slip[free]
             history.append(float(np.max(np.abs(F), initial=0.0)))
             if np.all(np.abs(F) <= self._pin_rtol * np.maximum(level, np.abs(tau_f))):
@@ -350,7 +357,8 @@ class FrictionDynamics(Dynamics):
             self._painleve(t, hyps, len(good))
         N = chosen["normal"]
         f = chosen["f"]
-        margin = np.where(stick, self._static_resistance[:self._nc] + self._mu_s * np.abs(N) - np.abs(f), np.nan)
+        margin = np.where(stick, friction_level.py_func(self._mu_s, N, self._static_resistance[:self._nc]) - np.abs(f),
+                          np.nan)
         return ContactSolution(chosen["qdd"], chosen["lam"], N, f, v_t, stick.copy(), margin)
 
     def _singular_hold(self, t, held):

@@ -49,6 +49,21 @@ RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 DEFAULT_EPS = 1e-3
 
 
+@njit(cache=True)
+def friction_level(coefficient, normal, constant):
+    """The size of a Coulomb force or torque, constant + coefficient |normal|: a contact's R + mu |N| [N], a pin's
+    T0 + mu r |R|_delta [N m]; with the static coefficient, the limit a stuck entry holds. Scalars (compiled) or
+    arrays (``.py_func``, reference path)."""
+    return constant + coefficient * np.abs(normal)
+
+
+@njit(cache=True)
+def pin_norm(rx, ry, delta):
+    """|R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) of a pin's reaction (delta: ``pin_friction_norm_width``), the smooth
+    norm that replaces |R|'s kink at R = 0 in the pin's friction torque. Scalars or arrays (``.py_func``)."""
+    return np.sqrt(rx * rx + ry * ry + delta * delta)
+
+
 @njit(PHASES, cache=True)
 def _mode_phases(mode, nlm, vt, cf, off, stick, s):
     """ExactCoulomb.phases: mode = the loads' nlm entries, then per contact (+1 stick / -1 slip, direction)."""

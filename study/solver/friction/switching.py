@@ -24,7 +24,7 @@ class StickSlipSwitching:
     Mode = (load entries..., then per contact, then per pin with friction: e_stick, e_dir). e_stick = +1
     in stick, -1 in slip; e_dir = the frozen sliding direction (+-1; kept, unused, in stick). Indicators,
     whose signs equal the mode entries while the mode holds (a pin's v_t is its relative rotation rate
-    omega, its f the torque tau, its static limit c T0 + mu_s r |R|_delta):
+    omega, its f the torque tau, its static limit T0 + mu_s r |R|_delta):
 
     - e_stick in slip:  -e_dir v_t       (crosses zero when the contact comes to rest)
     - e_stick in stick: c R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
