@@ -214,7 +214,7 @@ def hand_exact(t_end):
     def theta(grid):
         out = np.empty(len(grid))
         for i, tt in enumerate(grid):
-            t0, t1, f = next(p for p in pieces if p[0] <= tt <= p[1] + 1e-12)
+            _, _, f = next(p for p in pieces if p[0] <= tt <= p[1] + 1e-12)   # a sample at a stop, up to round-off
             out[i] = f(tt)[0]
         return out
     return stops, theta

@@ -23,7 +23,6 @@ runs from ground to the bar), and the torque on the bar is -tau = -(mu r |R|_del
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 import pytest
@@ -309,7 +308,10 @@ def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact, study_pendulum)
     limit = v["mu_s"] * v["r"] * np.sqrt(r.forces["normal_pin"][held] ** 2 + DELTA ** 2) + v["T0"]
     hold = v["m"] * v["g"] * v["l"] * np.abs(np.sin(r.q[held, 0]))   # the hand model's, at rest
     print(f"stuck pin: torque {need.max():.6g} N m (hand {hold.max():.6g}), limit {limit.max():.6g} N m")
-    assert np.all(need <= limit) and np.abs(need - hold).max() <= 1e-9 * hold.max() and hold.min() > 0.1
+    # held, the torque is the static balance m g l sin th at the run's own th: equal up to the solve's round-off
+    # (round_off, relative); the bar rests 0.028 rad off the vertical, so the hold is a real torque, not 0 = 0
+    assert np.all(need <= limit) and np.abs(need - hold).max() <= tolerance("round_off") * hold.max()
+    assert hold.min() > 0.1 * limit.max()
 
 
 def test_exact_pin_energy_balance(exact):
@@ -317,8 +319,6 @@ def test_exact_pin_energy_balance(exact):
     residual = np.abs(balance_residual(exact)).max()
     print(f"exact pin: energy balance residual {residual:.3g} J (bound {scale:.3g})")
     assert residual <= scale
-
-
 
 
 def test_unconverged_torque_solve_names_joint_time_and_state(mech, monkeypatch):
@@ -411,7 +411,8 @@ def test_holding_a_pin_that_locks_another_is_refused(shoulder_friction):
                    friction="exact")
     if not shoulder_friction:
         r = study.simulate(eom, q0, qd0, **options)
-        assert np.all(r.forces["stick_elbow"] == 1.0) and np.ptp(r.q[:, 0]) <= 1e-9
+        held = tolerance("adaptive_global_error_factor") * RTOL * np.abs(r.q).max()   # moves by its error only
+        assert np.all(r.forces["stick_elbow"] == 1.0) and np.ptp(r.q[:, 0]) <= held
         return
     with pytest.raises(FrictionLawError, match=r"'(shoulder|elbow)' comes to rest at t = 0 s and can be held, but "
                                                r"holding it also stops '(shoulder|elbow)'.*statically indeterminate"):

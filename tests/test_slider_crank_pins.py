@@ -192,9 +192,12 @@ def test_exact_pin_friction_is_the_limit_of_the_regularized():
     print(f"exact, pins with friction: energy residual {residual:.3g} J (bound {scale:.3g}); "
           f"events {exact.stats['event_times']}")
     assert residual <= scale
-    devs = [np.abs(run(mech, "regularized", friction_eps=eps).q[:, 2] - exact.q[:, 2]).max() for eps in (1e-3, 1e-4, 1e-5)]
+    devs = [np.abs(run(mech, "regularized", friction_eps=eps).q[:, 2] - exact.q[:, 2]).max()
+            for eps in (1e-3, 1e-4, 1e-5)]
     print("max |th1(regularized) - th1(exact)| at eps 1e-3, 1e-4, 1e-5: " + ", ".join(f"{d:.3g}" for d in devs))
-    assert devs[0] > devs[1] > devs[2] and devs[2] < 0.1 * devs[0]
+    # |tanh(v/eps) - sgn v| <= 2 exp(-2 |v| / eps): the laws differ only while an entry is within a few eps of rest, a
+    # time that shrinks at least in proportion to eps, so each tenfold smaller eps must shrink the difference tenfold
+    assert devs[1] <= devs[0] / 10 and devs[2] <= devs[1] / 10
 
 
 # --- friction in the pins ------------------------------------------------------------------------------

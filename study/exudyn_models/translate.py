@@ -211,6 +211,11 @@ def _rotation(a) -> Array:
     return np.array([[c, -s], [s, c]])
 
 
+#: How a friction law that reads a joint reaction (a guide's normal force, a pin's |R|) is evaluated.
+REACTION_LAW_EVALUATION = ("Python user function (reads the joint reaction through mbs.GetObjectOutput; no Exudyn "
+                           "element or symbolic user function has access to it)")
+
+
 # --------------------------------------------------------------------------------------------
 # load laws: lambdified once, evaluated from Exudyn's kinematics (live) or from its body series
 # --------------------------------------------------------------------------------------------
@@ -683,9 +688,7 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
                 model.force(com(j.guide[0]), user=fric.guide_force)
                 model.torque(com(j.guide[0]), user=fric.guide_torque)
             built.frictions_by_contact[j.name] = fric
-            built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
-                                                      "mbs.GetObjectOutput; no Exudyn element or symbolic user "
-                                                      "function has access to it)")
+            built.evaluation[f"friction_{j.name}"] = REACTION_LAW_EVALUATION
         delta = tolerance("pin_friction_norm_width")
         for j in d.pins():
             if not _active(d, j):
@@ -700,9 +703,7 @@ def build(mechanism: Mechanism | ParameterSet, q0, qd0, friction: str = "regular
             for k, (side, body) in enumerate(loaded):   # the first load records, the other reads the same state
                 model.torque(com(body), user=fric.load(side, record=k == 0))
             built.frictions_by_pin[j.name] = fric
-            built.evaluation[f"friction_{j.name}"] = ("Python user function (reads the joint reaction through "
-                                                      "mbs.GetObjectOutput; no Exudyn element or symbolic user "
-                                                      "function has access to it)")
+            built.evaluation[f"friction_{j.name}"] = REACTION_LAW_EVALUATION
     if configuration == "tuned" and not built.frictions:
         built.loads_jacobian = 0    # no Python load left whose derivative Newton needs
     model.assemble()

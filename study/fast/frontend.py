@@ -126,10 +126,10 @@ def pin_numbers(dyn: Dynamics) -> tuple[float, float]:
 
 
 def pack_options(eom: EquationsOfMotion, stabilization: Stabilization, law, n_work: int,
-                 n_load_modes: int, pin_numbers: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+                 n_load_modes: int, pin_numbers: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """The option arrays (ci, cf) in the layout of ``study.fast.dynamics``; ``pin_numbers``: see :func:`pin_numbers`."""
     r, nc = eom.n_constraints, len(eom.contacts)
-    pins = tuple(getattr(eom, "pin_frictions", ()))
+    pins = tuple(eom.pin_frictions)
     s = stabilization
     cf = [getattr(s, "tol", 0.0)]
     cf += [c.mu_kinetic for c in eom.contacts] + [c.mu_static for c in eom.contacts]
@@ -246,7 +246,7 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     sliding contacts, then the revolute joints with friction (|R| [N], the torque [N m])."""
     eom = s.dyn.eom
     m, r = eom.n_coordinates, eom.n_constraints
-    nt = len(eom.contacts) + len(getattr(eom, "pin_frictions", ()))
+    nt = len(eom.contacts) + len(eom.pin_frictions)
     out = np.zeros(m + r + 2 * nt)
     status = accelerations_entry(s.model.module.evaluate, s.bias, s.phases, float(t),
                                  np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),

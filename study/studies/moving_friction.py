@@ -1,4 +1,5 @@
-"""Friction between moving parts: contacts whose guide is itself a moving body.
+"""Friction between moving parts: sliding contacts whose guide is itself a moving body, and revolute joints with
+friction (pins).
 
 Case list ``reference/cases/moving_friction.toml``. Its groups are named ``<set>:<role>`` (one set per mechanism
 and variant) with role
@@ -8,7 +9,7 @@ and variant) with role
 * ``exudyn``: Exudyn's regularized law with the same eps at h, h/2, h/4;
 * ``eps``: the in-house regularized law at a sequence of eps, each against the exact run.
 
-A set may lack roles (a mechanism the exact law or Exudyn cannot run yet); every table holds the rows its runs allow.
+A set may lack roles (a mechanism the exact law or Exudyn cannot run); every table holds the rows its runs allow.
 Every run of a set shares the horizon and output step, so comparisons use common samples.
 
 :func:`summarize` returns the tables
@@ -21,11 +22,11 @@ Every run of a set shares the horizon and output step, so comparisons use common
     (:func:`study.pipeline.summaries.sample_agreement`), and the largest difference of their transition times against
     ``event_time_agreement_adaptive``;
 ``moving_friction_phases``
-    the exact run's stick and slip intervals per contact, with what started each (the initial state, a contact
-    coming to rest and being held or not, a stuck contact reaching its static limit) and the ratio |f_req| / limit
-    at that transition;
+    the exact run's stick and slip intervals per contact and pin, with what started each (the initial state, a
+    contact coming to rest and being held or not, a stuck contact reaching its static limit) and the ratio
+    |f_req| / limit at that transition;
 ``moving_friction_forces``
-    friction and normal force of each contact against time (exact and regularized), the stick flag, the dissipated
+    friction force and normal force of each contact (a pin: friction torque and |R|) against time (exact and regularized), the stick flag, the dissipated
     energy and the energy-balance residual of the exact run;
 ``moving_friction_exudyn``
     Exudyn against the in-house regularized run: max|dq|, max|dqd|, max|dF|, max|dN|, the dissipated energy's

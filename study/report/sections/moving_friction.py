@@ -6,7 +6,7 @@ order, titled by the case list's ``[report.sets."<set>"] title`` (else the mecha
 the stick intervals shaded and the exact run's transitions marked, the dissipated energy and the energy-balance
 residual; the stick/slip intervals; the two backends; Exudyn's errors and orders; the regularized law against the
 exact one as eps -> 0; and every run's dissipation and residual against its bound. Every number is read from a
-table; a set without some role (no exact law, no Exudyn model yet) has the parts its tables allow.
+table; a set without some role (no exact law, no Exudyn model) has the parts its tables allow.
 """
 
 from __future__ import annotations
@@ -87,7 +87,7 @@ def convergence_figure(exudyn: pd.DataFrame, eps: pd.DataFrame, title: str) -> F
     """Exudyn's errors against the step h and the regularized law's differences from the exact one against eps."""
     panels = []
     for frame, x, xlabel, slope, what in ((exudyn, "h", "step h [s]", 2, "Exudyn − in-house (regularized)"),
-                                          (eps, "friction_eps", "regularization width ε [m/s]", 3,
+                                          (eps, "friction_eps", "regularization width ε [m/s; rad/s in a pin]", 3,
                                            "regularized − exact (in-house)")):
         if frame.empty:
             continue
@@ -117,7 +117,8 @@ def _phases_text(phases: pd.DataFrame) -> list[str]:
             f"came to rest {len(stops)} time(s) and were held {len(held)} time(s).")
     if len(stops) > len(held):
         lowest = stops.loc[stops["started_by"] != "came to rest, held", "f_required_over_limit"].min()
-        text += (f" Where a contact could not be held, the force needed to hold it exceeded its static limit μ_s|N| "
+        text += (f" Where a contact could not be held, the force (a pin's torque) needed to hold it exceeded its "
+                 f"static limit (c R + μ_s|N| in a slider, T0 + μ_s r |R|_δ in a pin) "
                  f"by a factor of {fmt_number(lowest)} or more, and the sliding went on in the direction the other "
                  f"forces push it.")
     return [text, "", md_table(["contact", "phase", "from t [s]", "to t [s]", "started by", "|f_req| / limit"], rows,
@@ -140,7 +141,8 @@ def _orders_table(frame: pd.DataFrame, x: str, header: str) -> str:
     for _, r in frame.iterrows():
         values = [r[x]] + [r[d] for d in mf.DIFFERENCES]
         rows.append([fmt_number(v) for v in values] + [fmt_number(r[f"order_{c}"], 4) for c, _ in ORDER_COLUMNS])
-    head = [header, "max|Δq| [rad]", "max|Δq̇| [rad/s]", "max|ΔF| [N; N m for a pin]", "max|ΔN| [N]", "|ΔD(t_end)| [J]"]
+    head = [header, "max|Δq| [rad]", "max|Δq̇| [rad/s]", "max|ΔF| [N; N m for a pin]", "max|ΔN| [N]",
+            "|ΔD(t_end)| [J]"]
     head += [f"order {name}" for _, name in ORDER_COLUMNS]
     return md_table(head, rows, [True] * len(head))
 
@@ -153,7 +155,8 @@ def _exudyn_text(exudyn: pd.DataFrame) -> list[str]:
     low = orders.min() if orders.size else np.nan
     verdict = "at least" if low >= MIN_ORDER else "**below**"
     solvers = ", ".join(sorted(set(exudyn["solver"])))
-    return [f"Exudyn ({solvers}, regularized law with the same ε = {fmt_number(exudyn['friction_eps'].iloc[0])} m/s) "
+    return [f"Exudyn ({solvers}, regularized law with the same ε = {fmt_number(exudyn['friction_eps'].iloc[0])}, "
+            f"in m/s in a slider and rad/s in a pin) "
             f"against the in-house regularized run (DOP853 at the reference tolerances): observed orders "
             f"{fmt_number(low, 4)} to {fmt_number(orders.max() if orders.size else np.nan, 4)}, {verdict} the "
             f"{fmt_number(MIN_ORDER)} that second order requires (`cross_validation.toml` min_order).", "",
@@ -169,9 +172,9 @@ def _eps_text(eps: pd.DataFrame) -> list[str]:
     order = (f", max|Δq| at an observed order {fmt_number(dq.min(), 4)} to {fmt_number(dq.max(), 4)} in ε"
              if len(dq) else "")
     return [f"The regularized law against the exact one as ε → 0 (both at the reference tolerances, compared on the "
-            f"0.01 s samples): the differences {how}{order}. max|ΔF| is read on the samples only, so its orders "
+            f"saved samples): the differences {how}{order}. max|ΔF| is read on the samples only, so its orders "
             f"follow where the samples fall near the reversals.",
-            "", _orders_table(eps, "friction_eps", "ε [m/s]"), ""]
+            "", _orders_table(eps, "friction_eps", "ε [m/s; rad/s in a pin]"), ""]
 
 
 def _runs_text(runs: pd.DataFrame, timing: pd.DataFrame) -> list[str]:
@@ -182,7 +185,7 @@ def _runs_text(runs: pd.DataFrame, timing: pd.DataFrame) -> list[str]:
         cpu = timing["cpu_seconds"].iloc[i] if timing is not None and len(timing) == len(runs) else np.nan
         setting = (f"{r['solver']} h = {fmt_number(r['h'])} s" if r["engine"] == "exudyn"
                    else f"{r['solver']} ({r['backend']})")
-        law = r["friction"] + (f" ε = {fmt_number(r['friction_eps'])} m/s" if r["friction"] == "regularized" else "")
+        law = r["friction"] + (f" ε = {fmt_number(r['friction_eps'])}" if r["friction"] == "regularized" else "")
         within = VERDICT.get(str(r["residual_within_bound"]), r["residual_within_bound"])
         rows.append([r["role"], r["engine"], setting, law, fmt_number(r["dissipated_J"], 6),
                      fmt_number(r["residual_J"]), fmt_number(r["residual_bound_J"]), within,
@@ -234,8 +237,11 @@ def section(ctx: ReportContext) -> list[str]:
     tables = {"runs": runs, **{name: ctx.table(f"moving_friction_{name}")
                                for name in ("forces", "phases", "backends", "exudyn", "eps", "timing")}}
     keys = list(mf.sets(ctx.cases(STUDY)))
-    lines += ["Coulomb friction in joints whose guide moves: the friction force acts on both bodies, equal and "
-              "opposite, and the sliding velocity is the one relative to the guide. Each set below runs the exact "
+    lines += ["Coulomb friction between moving parts: in a slider whose guide moves, the friction force acts on "
+              "slider and guide, equal and opposite, at the sliding velocity relative to the guide; in a pin between "
+              "two bodies, the friction torque μ r |R| (R the joint's reaction) acts on both, equal and opposite, "
+              "against their relative rotation. ε is in m/s in a slider and rad/s in a pin. Each set below runs the "
+              "exact "
               "law (event-located stick/slip) on both backends, the regularized law (tanh(v/ε)) in-house and in "
               f"Exudyn at three steps, and the regularized law at shrinking ε against the exact one "
               f"(`reference/cases/moving_friction.toml`, {len(keys)} set(s)).", ""]

@@ -38,9 +38,9 @@ system tau = g(tau) is solved by Newton (``pin_friction_solve_rtol``), around th
 repeated at every iterate. s_p is the treatment's slip factor of omega_p [rad/s] ('regularized', 'sign'; the width
 friction_eps read in rad/s) or the mode's frozen direction ('exact'). A stuck pin holds while |tau_p| <=
 mu_s,p r_p |R_p|_delta + T0_p (its constant torque always holds; the readings of ``RESISTANCE_READINGS`` are paper
-000's reading of a slider's resistance). The pins follow the
-contacts in every per-contact output and in the exact treatment's mode (``normal_<pin>`` = |R| [N],
-``friction_<pin>`` = tau [N m], ``v_t`` = omega [rad/s], ``work_friction_<pin>`` = its work).
+000's reading of a slider's resistance). The pins follow the contacts in every per-contact output and in the exact
+treatment's mode (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = tau [N m], ``v_t`` = omega [rad/s],
+``work_friction_<pin>`` = its work).
 """
 
 from __future__ import annotations
@@ -82,7 +82,8 @@ class PainleveError(RuntimeError):
     contacts : tuple of str
     t : float
     mu : tuple of float
-        The kinetic coefficients of the contacts whose normal-force sign was hypothesized.
+        The kinetic coefficients of the contacts whose normal-force sign was hypothesized (for a singular hold of
+        stuck pins: their static coefficients).
     consistent : int
         Number of consistent hypotheses found (0 or >= 2 distinct ones).
     singular : bool
@@ -99,11 +100,12 @@ class PainleveError(RuntimeError):
 
 @dataclass(frozen=True)
 class ContactSolution:
-    """Accelerations and contact forces at one state (shapes: (m,), (r,), then one entry per contact).
+    """Accelerations and contact forces at one state (shapes: (m,), (r,), then one entry per contact, then per pin).
 
     ``friction`` is the tangential force f_j on the body along the tangent (resistance included;
-    in stick, the force the guide must supply). ``margin`` = c R + mu_s |N| - |f| in stick (c: the
-    static fraction of R, ``RESISTANCE_READINGS``), NaN in slip.
+    in stick, the force the guide must supply), a pin's torque tau_p. ``margin`` = c R + mu_s |N| - |f| in stick
+    (c: the static fraction of R, ``RESISTANCE_READINGS``), T0 + mu_s r |R|_delta - |tau| for a stuck pin, NaN in
+    slip.
     """
 
     qdd: Array
@@ -200,9 +202,8 @@ class FrictionDynamics(Dynamics):
         return tuple(mode[:self.n_load_modes])
 
     def phases(self, mode, v_t: Array) -> tuple[Array, Array]:
-        """(stick flags, slip factors s) of the contacts in ``mode`` at tangential velocities ``v_t``."""
-        nc = self._nc
-        entries = None
+        """(stick flags, slip factors s) of the contacts, then the pins, in ``mode`` at their velocities ``v_t``
+        (tangential velocities, then relative rotation rates)."""
         entries = None
         if self.law.switched:
             n = self.n_contacts

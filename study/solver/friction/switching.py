@@ -155,10 +155,11 @@ class StickSlipSwitching:
 
         Entry i is locked when the stuck entries and the constraints leave it no motion: its mobility A_i qdd under a
         unit force A_i^T (A_i its velocity row; qdd from the constraints plus every stuck entry's row) drops to
-        round-off (``CONSISTENCY_RTOL`` of its mobility without entry j held). All the friction entries of a
-        one-degree-of-freedom mechanism come to rest together like that: which of them holds, and how much, is
-        statically indeterminate, and the exact treatment refuses it rather than pick one. Entries whose friction
-        is identically zero carry no share and are not checked.
+        round-off (``CONSISTENCY_RTOL`` of its mobility without entry j held: the mobility comes from the same
+        saddle-point solves whose round-off that constant bounds, condition numbers below ~1e5). All the friction
+        entries of a one-degree-of-freedom mechanism come to rest together like that: which of them holds, and how
+        much, is statically indeterminate, and the exact treatment refuses it rather than pick one. Entries whose
+        friction is identically zero carry no share and are not checked.
         """
         dyn = self.dyn
         stick, _ = dyn.phases(new, None)
@@ -208,13 +209,20 @@ class StickSlipSwitching:
         if d * a_t >= -CONSISTENCY_RTOL * max(scale, abs(a_t)):
             return
         kinetic = float(abs(slide.friction[j]))
+        limit = float(dyn.static_limit(held.normal)[j])
+        if j >= len(dyn.eom.contacts):   # a pin: its T0 always holds, so only mu_s < mu_k gets here
+            what, unit, rate, law, fix = "pin", "N m", "rad/s^2", "T0 + mu_k r |R|_delta", "mu_s >= mu_k for the pin"
+        else:
+            what, unit, rate, law = "contact", "N", "m/s^2", "R + mu_k |N|"
+            fix = "resistance_reading 'holds' (the contact stays at rest, held by R + mu_s |N|)"
         raise FrictionLawError(
-            f"contact {name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
-            f"|f_req| = {abs(float(held.friction[j])):.6g} N, above its static limit {float(dyn.static_limit(held.normal)[j]):.6g} N "
-            f"(resistance_reading {dyn.law.resistance_reading!r}), but sliding {'+' if d > 0 else '-'} meets the kinetic "
-            f"force {kinetic:.6g} N (R + mu_k |N|), which decelerates it (a_t = {a_t:.3g} m/s^2 against the sliding "
-            f"direction). A static limit below the kinetic resistance makes the law inconsistent here; use "
-            f"resistance_reading 'holds' (the contact stays at rest, held by R + mu_s |N|) or a regularized law",
+            f"{what} {name!r} at rest at t = {t:.9g} s has no consistent mode: holding it needs "
+            f"|f_req| = {abs(float(held.friction[j])):.6g} {unit}, above its static limit {limit:.6g} {unit} "
+            f"(resistance_reading {dyn.law.resistance_reading!r}), but sliding {'+' if d > 0 else '-'} meets the "
+            f"kinetic "
+            f"{'torque' if what == 'pin' else 'force'} {kinetic:.6g} {unit} ({law}), which decelerates it "
+            f"(rate {a_t:.3g} {rate} against the sliding direction). A static limit below the kinetic one makes the "
+            f"law inconsistent here; use {fix} or a regularized law",
             t=float(t), quantity="friction", contact=name)
 
     def _log(self, t, j, was, new, held):
