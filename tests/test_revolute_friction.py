@@ -417,3 +417,21 @@ def test_holding_a_pin_that_locks_another_is_refused(shoulder_friction):
     with pytest.raises(FrictionLawError, match=r"'(shoulder|elbow)' comes to rest at t = 0 s and can be held, but "
                                                r"holding it also stops '(shoulder|elbow)'.*statically indeterminate"):
         study.simulate(eom, q0, qd0, **options)
+
+
+@pytest.mark.parametrize("backend", ["reference", "compiled"])
+def test_a_subnormal_start_velocity_is_rest(backend):
+    """The study's pendulum released with a rate of a few subnormal ulps (what +-4 ulps of make verify's perturbation
+    check put on a zero): at rest, so the same transitions as the exact start from rest, not a slip in the direction
+    of the round-off's sign reversed at once."""
+    mech = study.mechanisms.mechanism(study.load_parameters("pin_pendulum"))
+    state = mech.initial_state()
+    options = dict(t_end=1.0, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP,
+                   friction="exact", backend=backend)
+    plain = study.simulate(mech, **options)
+    for sign in (1, -1):
+        qd = state.qd + sign * 4 * np.spacing(0.0)
+        r = study.simulate(mech, state.q, qd, **options)
+        assert [(x["t"], x.get("to")) for x in r.stats["friction_transitions"][1:]] == \
+            [(x["t"], x.get("to")) for x in plain.stats["friction_transitions"][1:]]
+        assert r.stats["friction_transitions"][0]["initial"] == plain.stats["friction_transitions"][0]["initial"]

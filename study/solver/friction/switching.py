@@ -67,9 +67,10 @@ class StickSlipSwitching:
             g = np.asarray(eom.indicators(t0, q, qd), dtype=float)
             load = [1 if gi >= 0 else -1 for gi in g]
         mode = tuple(load + friction)
-        # contacts at rest: stick if the static limit allows it, else slide where the loads push
+        # contacts at rest: stick if the static limit allows it, else slide where the loads push. A subnormal
+        # velocity (below the smallest normal double, ~2.2e-308) is rest too: it carries no reliable sign
         for j in range(nc):
-            if v_t[j] == 0.0:
+            if abs(v_t[j]) < np.finfo(float).tiny:
                 mode = self._rest_decision(t0, q, qd, mode, j, record=False)
         if dyn.n_load_modes and np.any(np.asarray(eom.indicators(t0, q, qd)) == 0):
             dt = 1e-9  # as integrate.initial_mode: a zero takes the sign it has just after t0
