@@ -2,7 +2,8 @@
 
 The mechanisms are tests/test_revolute_friction.py's: a pendulum on a ground pin with friction (its hand model in the
 minimal coordinate th) and a double pendulum whose elbow, a pin between two moving bars, has friction. For 'exact'
-the hand model is the pendulum's with sgn(th') replaced by the frozen sliding direction between located stops:
+the hand model (test_revolute_friction.hand_exact) is the pendulum's with sgn(th') replaced by the frozen sliding
+direction between located stops:
 
     (Ic + m l^2) th'' = -m g l sin th + (mu r |R|_delta + T0) e_dir      (slip; e_dir = sgn(omega), omega = -th')
 
@@ -17,17 +18,16 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import study
 from study.reference_data import tolerance
 from test_revolute_friction import (DELTA, DOUBLE, EPS, OUTPUT_STEP, RTOL, START, T_END, VALUES, describe,
-                                    describe_double, double_state, full_state, hand_accel, parameter_set, pendulum)
+                                    describe_double, double_state, full_state, hand_accel, hand_exact, parameter_set,
+                                    pendulum)
 
 IO = VALUES["Ic"] + VALUES["m"] * VALUES["l"] ** 2                  # the pendulum's inertia about the pin
 MGL = VALUES["m"] * VALUES["g"] * VALUES["l"]
-CAPACITY = VALUES["mu"] * VALUES["r"] * math.hypot(VALUES["m"] * VALUES["g"], DELTA) + VALUES["T0"]  # at rest
-EXACT_T_END = 4.5          # the pendulum released at 1 rad stops for good at ~3.55 s (hand model below)
+EXACT_T_END = 4.5          # the pendulum released at 1 rad stops for good at ~3.55 s (test_revolute_friction.hand_exact)
 EXACT_RTOL = 1e-10
 
 
@@ -182,42 +182,6 @@ def test_exact_stuck_pin_holds_the_bar(mechanisms, th):
     assert abs(out[0]) <= tolerance("round_off") * MGL / IO
     assert abs(out[5] - VALUES["m"] * VALUES["g"]) <= tolerance("round_off") * VALUES["m"] * VALUES["g"]
     assert abs(out[6] - (-MGL * math.sin(th))) <= tolerance("round_off") * MGL
-
-
-def hand_exact(t_end):
-    """The exact treatment's hand model (module docstring) from START: its stops [(t, th, th'' just before, stuck)]
-    and th(t) on a grid (callable). Each slip segment is integrated at reference_rtol up to th' = 0."""
-    t, y, stops, pieces = 0.0, np.array(START, dtype=float), [], []
-    s = -1.0 if math.sin(y[0]) > 0 else 1.0          # from rest at 1 rad: gravity turns the bar down, th' < 0
-    while t < t_end:
-        def rhs(_, z, s=s):
-            return [z[1], hand_accel(z[0], z[1], s)[0]]
-
-        def stop(_, z):
-            return z[1]
-        stop.terminal, stop.direction = True, -s      # th' returns to 0 from the side s
-        sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=tolerance("reference_rtol"),
-                        atol=tolerance("reference_atol"), events=stop, dense_output=True)
-        assert sol.success
-        pieces.append((t, sol.t[-1], sol.sol))
-        if not sol.t_events[0].size:
-            break
-        t, y = float(sol.t_events[0][0]), np.array([sol.y_events[0][0][0], 0.0])
-        before = hand_accel(y[0], 0.0, s)[0]
-        stuck = abs(MGL * math.sin(y[0])) <= CAPACITY
-        stops.append((t, y[0], before, stuck))
-        if stuck:
-            pieces.append((t, t_end, lambda tt, th=y[0]: np.array([th, 0.0])))
-            break
-        s = -1.0 if math.sin(y[0]) > 0 else 1.0
-
-    def theta(grid):
-        out = np.empty(len(grid))
-        for i, tt in enumerate(grid):
-            _, _, f = next(p for p in pieces if p[0] <= tt <= p[1] + 1e-12)   # a sample at a stop, up to round-off
-            out[i] = f(tt)[0]
-        return out
-    return stops, theta
 
 
 @pytest.fixture(scope="module")

@@ -242,29 +242,45 @@ def test_sign_treatment_with_rk4_matches_the_hand_rk4(mech):
     assert dev <= tolerance("fast_fixed_step_agreement") * np.abs(hand[:, 0]).max()
 
 
-def hand_exact(t_end, v, delta=DELTA):
-    """The exact stick/slip law in th: slip phases with the frozen direction d (s = d, coefficient v["mu"] = mu_k),
-    each ended where th' = 0 (located by solve_ivp's event); at rest the pin holds if the torque that keeps th'' = 0,
-    m g l sin th, is within mu_s r |R|_delta + T0, where at rest and held R = (0, m g); else it slides where gravity
-    pushes, d = -sgn(sin th). Returns (t_stick or None, the slip segments' solutions)."""
-    m, l, g = v["m"], v["l"], v["g"]
-    capacity = v["mu_s"] * v["r"] * math.sqrt((m * g) ** 2 + delta ** 2) + v["T0"]
-    t, y, segments = 0.0, np.array(START, dtype=float), []
+def hand_exact(t_end, v=None, delta=DELTA):
+    """The exact stick/slip law in th from START: slip phases with the frozen direction s (coefficient v["mu"] =
+    mu_k), each ended where th' = 0 (located by solve_ivp's event); at rest the pin holds if the torque that keeps
+    th'' = 0, m g l sin th, is within mu_s r |R|_delta + T0, where at rest and held R = (0, m g); else it slides where
+    gravity pushes, s = -sgn(sin th). ``v``: VALUES with mu_s = mu by default. Returns (stops, theta): the stops
+    [(t, th, th'' just before, stuck)] and theta(grid), the hand model's th on a grid."""
+    v = {**VALUES, "mu_s": VALUES["mu"]} if v is None else v
+    mgl = v["m"] * v["g"] * v["l"]
+    capacity = v["mu_s"] * v["r"] * math.hypot(v["m"] * v["g"], delta) + v["T0"]
+    t, y, stops, pieces = 0.0, np.array(START, dtype=float), [], []
+    s = -math.copysign(1.0, math.sin(y[0]))           # from rest at 1 rad: gravity turns the bar down, th' < 0
     while t < t_end:
-        if abs(m * g * l * math.sin(y[0])) <= capacity:
-            return t, segments
-        d = -math.copysign(1.0, math.sin(y[0]))
-        stop = lambda t, y, d: y[1]    # noqa: E731
-        stop.terminal, stop.direction = True, -d   # th' returns to 0 (not its start at 0)
-        sol = solve_ivp(lambda t, y, d: [y[1], hand_accel(y[0], y[1], d, v)[0]], (t, t_end), y, args=(d,),
-                        method="DOP853", rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"),
-                        events=stop, dense_output=True)
+        def rhs(_, z, s=s):
+            return [z[1], hand_accel(z[0], z[1], s, v)[0]]
+
+        def stop(_, z):
+            return z[1]
+        stop.terminal, stop.direction = True, -s      # th' returns to 0 from the side s (not its start at 0)
+        sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=tolerance("reference_rtol"),
+                        atol=tolerance("reference_atol"), events=stop, dense_output=True)
         assert sol.success
-        segments.append(sol)
-        if sol.status == 0:
-            return None, segments
+        pieces.append((t, sol.t[-1], sol.sol))
+        if not sol.t_events[0].size:
+            break
         t, y = float(sol.t_events[0][0]), np.array([sol.y_events[0][0][0], 0.0])
-    return None, segments
+        stuck = abs(mgl * math.sin(y[0])) <= capacity
+        stops.append((t, y[0], hand_accel(y[0], 0.0, s, v)[0], stuck))
+        if stuck:
+            pieces.append((t, t_end, lambda tt, th=y[0]: np.array([th, 0.0])))
+            break
+        s = -math.copysign(1.0, math.sin(y[0]))
+
+    def theta(grid):
+        out = np.empty(len(grid))
+        for i, tt in enumerate(grid):
+            _, _, f = next(p for p in pieces if p[0] <= tt <= p[1] + 1e-12)   # a sample at a stop, up to round-off
+            out[i] = f(tt)[0]
+        return out
+    return stops, theta
 
 
 T_EXACT = 4.0     # the study's pin_pendulum comes to rest after five swings, near 3.55 s
@@ -288,16 +304,17 @@ def test_exact_pin_comes_to_rest_when_the_hand_model_does(exact, study_pendulum)
     as the parameter file's); the stuck pin's torque is the hand model's and within its static limit."""
     r, v = exact, study_pendulum
     assert r.q[0, 0] == START[0] and r.qd[0, 0] == START[1]
-    t_stick, segments = hand_exact(T_EXACT, v)
-    assert t_stick is not None and len(segments) >= 4
+    stops_hand, theta = hand_exact(T_EXACT, v)
+    assert stops_hand[-1][3] and len(stops_hand) >= 4
+    t_stick = stops_hand[-1][0]
     stops = [tr for tr in r.stats["friction_transitions"] if tr.get("contact") == "pin" and tr["to"] == "stick"]
-    print(f"exact pin: hand stick at {t_stick:.9f} s after {len(segments)} slip phases; study (difference): "
+    print(f"exact pin: hand stick at {t_stick:.9f} s after {len(stops_hand)} slip phases; study (difference): "
           f"{[(round(x['t'], 9), round(x['t'] - t_stick, 12)) for x in stops]}")
     assert len(stops) == 1
     # the located stop is an event of the adaptive run: its time error follows the motion's (global) error
     assert abs(stops[0]["t"] - t_stick) <= tolerance("adaptive_global_error_factor") * RTOL * T_EXACT
     moving = r.t < t_stick
-    hand = np.array([next(seg for seg in segments if t <= seg.t[-1]).sol(t)[0] for t in r.t[moving]])
+    hand = theta(r.t[moving])
     dev = np.abs(r.q[moving, 0] - hand).max()
     bound = tolerance("adaptive_global_error_factor") * RTOL * np.abs(hand).max()
     print(f"exact pin vs hand model: max |d th| = {dev:.3g} rad (bound {bound:.3g})")
