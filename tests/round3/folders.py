@@ -1,0 +1,7 @@
+"""Round three, group 'folders and saves': see tests/round3/__init__.py."""
+
+from __future__ import annotations
+
+from round3 import add  # noqa: F401
+
+G = "folders and saves"
