@@ -159,7 +159,7 @@ def trajectories_figure(reference: SimulationResult, runs: Mapping[str, Simulati
     unit_text = f" [{unit}]" if unit else ""
     m = len(names)
     with _style():
-        fig = Figure(figsize=(3.6 * m, 6.0))
+        fig = Figure(figsize=(3.6 * m, 6.0), layout="constrained")
         axes = fig.subplots(2, m, sharex=True, squeeze=False)
         for i, name in enumerate(names):
             top, bottom = axes[0, i], axes[1, i]
@@ -180,9 +180,8 @@ def trajectories_figure(reference: SimulationResult, runs: Mapping[str, Simulati
         fig.suptitle(f"{pretty_mechanism(reference.meta)}: trajectories. Differences for integrator {setting}, "
                      f"every stabilization method ({ref_text})", fontsize=10)
         handles, labels = axes[1, 0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), frameon=False,
+        fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5), frameon=False,
                    title="method")
-        fig.set_layout_engine("tight", rect=(0, 0.1, 1, 1))
     return fig
 
 

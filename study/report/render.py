@@ -278,7 +278,7 @@ def markdown_parser(image_source: Callable[[str], str] = lambda src: src) -> Mar
     return md
 
 
-def markdown_to_html(markdown: str, image_source: Callable[[str], str], title: str) -> str:
+def markdown_to_html(markdown: str, image_source: Callable[[str], str], title: str, toc_after: str = "") -> str:
     """Render the report's Markdown as one self-contained HTML page (see the module docstring).
 
     Parameters
@@ -287,14 +287,17 @@ def markdown_to_html(markdown: str, image_source: Callable[[str], str], title: s
     image_source : maps an image path as written in the Markdown to the ``src`` to use (a data URI)
     title : the page title
 
-    The table of contents goes before the first heading of level TOC_LEVELS[0].
+    The table of contents goes before the first heading of level TOC_LEVELS[0], or, with ``toc_after`` (a heading
+    id), before the first such heading after that heading's section (the findings come before the contents).
     """
     md = markdown_parser(image_source)
     env: dict = {}
     tokens = md.parse(markdown, env)
     toc = _toc(tokens, md.renderer, md.options, env)
-    first = next((i for i, t in enumerate(tokens) if t.type == "heading_open" and t.tag == f"h{TOC_LEVELS[0]}"),
-                 len(tokens))
+    tops = [i for i, t in enumerate(tokens) if t.type == "heading_open" and t.tag == f"h{TOC_LEVELS[0]}"]
+    after = [k for k, i in enumerate(tops) if toc_after and tokens[i].attrGet("id") == toc_after]
+    rest = tops[after[0] + 1:] if after else tops
+    first = rest[0] if rest else len(tokens)
     if toc:
         block = Token("html_block", "", 0, content=toc + "\n", block=True)
         tokens = tokens[:first] + [block] + tokens[first:]

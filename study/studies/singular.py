@@ -62,6 +62,11 @@ def _setting(case: Case) -> str:
     return f"h={o['h']:g}" if case.engine == "exudyn" else case.label("setting")
 
 
+def run_label(case: Case) -> str:
+    """A run's name in the tables and figures: method (setting, engine)."""
+    return f"{_method(case)} ({_setting(case)}, {case.engine})"
+
+
 def b0(case: Case, r: SimulationResult) -> tuple[np.ndarray, np.ndarray]:
     """x of B0, the top of the first crank, L cos(th0), and its rate -L sin(th0) th0' (relative coordinate 0 is
     the first crank's angle)."""
@@ -120,7 +125,7 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
         every = max(int(round(SAMPLE_EVERY / (r.t[1] - r.t[0]))), 1)
         if row["N"] == 2:
             traj.setdefault("reference (exact motion)", pd.Series(reference[::every], index=r.t[::every]))
-            traj[f"{row['method']} ({row['setting']}, {case.engine})"] = pd.Series(xb[::every], index=r.t[::every])
+            traj[run_label(case)] = pd.Series(xb[::every], index=r.t[::every])
         step, to_crossing = _largest_energy_step(r.t, E, r.q[:, 0])
         at_limit = r.stats.get("newton_limit_steps", r.stats.get("al_unconverged", np.nan))
         m = r.q.shape[1]

@@ -90,7 +90,7 @@ def _positive(x: np.ndarray) -> np.ndarray:
 def differences_figure(ref, runs, mechanism: str, variant: str) -> Figure:
     names = ref.meta.get("coordinate_names") or [f"q{i + 1}" for i in range(ref.q.shape[1])]
     with figures._style():
-        fig = Figure(figsize=(9.0, 5.4))
+        fig = Figure(figsize=(9.0, 5.4), layout="constrained")
         axes = fig.subplots(2, 1, sharex=True)
         for solver, (h, run) in runs.items():
             ia, ib = xv.common_samples(run, ref)
@@ -108,13 +108,12 @@ def differences_figure(ref, runs, mechanism: str, variant: str) -> Figure:
         axes[0].legend(loc="center left", bbox_to_anchor=(1.01, 0.0), frameon=False)
         fig.suptitle(f"{_mech(mechanism)} (variant {variant}): Exudyn minus in-house reference "
                      f"(DOP853 rtol 1e-12, projection), regularized friction", fontsize=10)
-        fig.tight_layout()
     return fig
 
 
 def forces_figure(ref, runs, mechanism: str, variant: str) -> Figure:
     with figures._style():
-        fig = Figure(figsize=(9.0, 5.4))
+        fig = Figure(figsize=(9.0, 5.4), layout="constrained")
         axes = fig.subplots(2, 1, sharex=True)
         pairs = ((axes[0], xv.tangential_force, "tangential force F [N]\n(Coulomb + resistance)"),
                  (axes[1], xv.normal_force, "normal guide force N [N]"))
@@ -127,7 +126,6 @@ def forces_figure(ref, runs, mechanism: str, variant: str) -> Figure:
         axes[0].legend(loc="best", frameon=False)
         fig.suptitle(f"{_mech(mechanism)} (variant {variant}): guide forces, Exudyn and in-house "
                      f"(regularized tanh friction, same eps)", fontsize=10)
-        fig.tight_layout()
     return fig
 
 
@@ -135,7 +133,7 @@ def reactions_figure(ref, runs, mechanism: str, variant: str) -> Figure:
     joints = xv.inhouse_joint_forces(ref)
     names = [f"lam{i + 1}" for i in range(ref.lam.shape[1])] + sorted(k for k in joints if k.endswith("_x"))
     with figures._style():
-        fig = Figure(figsize=(10.0, 6.0))
+        fig = Figure(figsize=(10.0, 6.0), layout="constrained")
         axes = fig.subplots(2, 1, sharex=True)
         colors = matplotlib_colors(len(names))
         for name, color in zip(names, colors):
@@ -156,7 +154,6 @@ def reactions_figure(ref, runs, mechanism: str, variant: str) -> Figure:
         axes[1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False, fontsize=6, ncol=2)
         fig.suptitle(f"{_mech(mechanism)} (variant {variant}, frictionless): multipliers lam and joint forces "
                      f"(x, on the distal body), Exudyn vs in-house", fontsize=10)
-        fig.tight_layout()
     return fig
 
 

@@ -53,7 +53,7 @@ def forces_figure(forces: pd.DataFrame, phases: pd.DataFrame, title: str) -> Fig
     transitions marked; then the dissipated energy and the energy-balance residual of the exact run."""
     contacts = list(dict.fromkeys(forces["contact"]))
     with figures._style():
-        fig = Figure(figsize=(9.0, 2.1 * (2 * len(contacts) + 2) + 0.6))
+        fig = Figure(figsize=(9.0, 2.1 * (2 * len(contacts) + 2) + 0.6), layout="constrained")
         axes = fig.subplots(2 * len(contacts) + 2, 1, sharex=True)
         for k, name in enumerate(contacts):
             f = forces[forces["contact"] == name]
@@ -79,7 +79,6 @@ def forces_figure(forces: pd.DataFrame, phases: pd.DataFrame, title: str) -> Fig
         axes[-1].set_ylabel("energy residual [J]\nΔ(T+V) − W_loads + D")
         axes[-1].set_xlabel("time t [s]")
         fig.suptitle(title, fontsize=10)
-        fig.tight_layout()
     return fig
 
 
