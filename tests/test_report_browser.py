@@ -13,6 +13,7 @@ import pytest
 
 from chromium import Chromium, find_chromium
 from study.reference_data import tolerance
+from study.report.sections import findings
 
 ROOT = Path(__file__).resolve().parents[1]
 REPORT = ROOT / "reports" / "report.html"
@@ -49,7 +50,9 @@ CHECKS_JS = r"""
           errata: errata ? {top, bottom, maths: errata.parentElement.querySelectorAll('math').length} : null,
           tables: document.querySelectorAll('table').length,
           wrapped: document.querySelectorAll('.table-wrap > table').length,
-          toc: document.querySelectorAll('nav.toc a').length};
+          toc: document.querySelectorAll('nav.toc a').length,
+          firstSection: (() => { const h = document.querySelector('h2');
+                                 return h ? {id: h.id, top: h.getBoundingClientRect().top} : null; })()};
 })(SLACK)
 """
 
@@ -126,6 +129,14 @@ def test_browser_no_horizontal_overflow_outside_tables(page):
 def test_browser_screenshots_saved(page):
     for name in ("first_screen.png", "errata.png"):
         assert (SCREENSHOTS / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@browser_test
+def test_browser_first_screen_opens_with_the_findings(page):
+    """The first section heading is the findings, in the upper half of the first screen (before the contents)."""
+    first = page["firstSection"]
+    assert first is not None and first["id"] == findings.ANCHOR, first
+    assert first["top"] < VIEWPORT[1] / 2, first
 
 
 def test_raw_markdown_detector_can_fail():

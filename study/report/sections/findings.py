@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from mdit_py_plugins.anchors.index import slugify
 
+from study import mechanisms
 from study.bench.settings import RATIO_LEVEL
 from study.reference_data import tolerance
 from study.report.context import ReportContext
@@ -109,8 +110,9 @@ def exudyn(ctx: ReportContext) -> str:
     at = ratios[(ratios["comparison"] == "compiled / Exudyn tuned") & ratios["ratio_inhouse_over_exudyn"].notna()
                 & np.isclose(ratios["level"], RATIO_LEVEL, rtol=1e-9, atol=0)]
     low_text = "" if low.empty else (
-        f"; the {len(low)} below it are all {' and '.join(sorted(set(low['mechanism'] + ' ' + low['variant'])))}, "
-        "whose cutting force switches on and off between fixed steps")
+        f"; the {len(low)} below it are all of the "
+        f"{' and '.join(sorted({f'{mechanisms.label(m)}, variant {v}' for m, v in zip(low['mechanism'], low['variant'])}))}"
+        ", whose cutting force switches on and off between fixed steps")
     return (f"Exudyn's models, built from the same descriptions, converge to the in-house reference: "
             f"{len(orders) - len(low)} of {len(orders)} step halvings show order ≥ {min_order:g} in q{low_text} "
             f"(`exudyn_agreement`; {link(EXUDYN)}). At equal accuracy (max|Δq| ≤ {RATIO_LEVEL:g} rad) the compiled "
