@@ -113,7 +113,7 @@ def test_floating_frame_energy_balances_with_the_dampers_work(frame_validation):
 
 def test_floating_frame_initial_accelerations_through_body_poses(frame_validation):
     """Exudyn's initial accelerations map back through every body's pose, pose'' = J qdd + dJ/dt qd
-    (study.exudyn_models.translate.Kinematics.rates): the frame's own rows give x'', y'' directly, the pendulum's
+    (study.exudyn_models.kinematics.Kinematics.rates): the frame's own rows give x'', y'' directly, the pendulum's
     rows give them with its centripetal term dJ/dt qd (2 rad/s here), so an error in that term leaves the rows
     inconsistent and moves the least-squares x'', y''. Bounds as for every mechanism's initial solve
     (reference/cross_validation.toml: reaction_zero_velocity_relative, reaction_velocity_term_relative)."""

@@ -18,11 +18,13 @@ building
     Model building blocks: planar rigid bodies, joints, loads, sensors read back as arrays.
 guards
     The guarded joint-reaction reading in a user function, and the regularized friction along a guide and in a
-    revolute joint.
+    revolute joint (the law itself from its one home, study.solver.friction.laws and study.fast.signs).
 solve
-    Running a built model (seeding, SolveDynamic, CPU timing) and post-processing into a SimulationResult.
+    Running a built model (SolveDynamic, CPU timing) and assembling the SimulationResult from its series.
 translate
-    Description -> Exudyn model -> SimulationResult, and the initial accelerations / multipliers.
+    Description -> Exudyn model -> SimulationResult, and the initial accelerations / multipliers; the modules of
+    the translation (one handler module per element kind: elements, loads, friction; the result mapping: mapping,
+    series, conventions; kinematics, load_law, assembly) are listed in its docstring.
 """
 
 from study.exudyn_models.settings import (

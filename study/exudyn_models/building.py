@@ -215,7 +215,7 @@ class Model:
         obj, kind = self.joints[name]
         if ovt is None:
             ovt = OVT.ForceLocal if kind == "prismatic" else OVT.Force
-        return np.asarray(self.mbs.GetObjectOutput(obj, ovt), dtype=float)
+        return np.atleast_1d(np.asarray(self.mbs.GetObjectOutput(obj, ovt), dtype=float))   # distance: a scalar
 
     def node_output(self, name: str, ovt) -> Array:
         return np.asarray(self.mbs.GetNodeOutput(self.node(name), ovt), dtype=float)

@@ -1,5 +1,12 @@
 """The guarded reading of a joint reaction inside a user function, and the regularized friction laws built on it:
-along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFriction`)."""
+along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFriction`).
+
+The law itself is not written here: the friction level is :func:`study.solver.friction.laws.friction_level` (and a
+pin's |R|_delta :func:`study.solver.friction.laws.pin_norm`), run as their Python source (``py_func``) as the
+reference path runs them, and the regularized sign tanh(v/eps) is ``study.fast.signs.SIGN_FUNCTIONS['tanh']``, the
+compiled function itself (libm's tanh, as the compiled loop; its ``py_func`` would run NumPy's tanh, which differs
+from libm's by one unit in the last place at about one argument in ten).
+"""
 
 from __future__ import annotations
 
@@ -10,8 +17,12 @@ import exudyn as exu
 
 from study.exudyn_models.building import Model
 from study.exudyn_models.settings import SEED_MAX_ITERATIONS, SEED_TOLERANCE
+from study.fast.signs import SIGN_FUNCTIONS
+from study.solver.friction.laws import friction_level, pin_norm
 
 OVT = exu.OutputVariableType
+#: the friction laws' one home (see the module docstring)
+LEVEL, NORM, SLIP = friction_level.py_func, pin_norm.py_func, SIGN_FUNCTIONS["tanh"]
 
 
 class ReactionGuard:
@@ -108,11 +119,16 @@ class GuideFriction(RecordedFriction):
         vel = mbs.GetMarkerOutput(self.marker, OVT.Velocity)
         v = self.axis[0] * vel[0] + self.axis[1] * vel[1]
         n = self.guard.value(mbs)
-        s = math.tanh(v / self.eps)
-        coulomb, resistance = -self.mu * abs(n) * s, -self.resistance * s
+        coulomb, resistance = self.law(n, v)
         self.last = (n, v, coulomb, resistance)
         f = coulomb + resistance
         return [f * self.axis[0], f * self.axis[1], 0.0]
+
+    def law(self, n: float, v: float) -> tuple[float, float]:
+        """(Coulomb part, resistance) of the tangential force at normal force n and sliding velocity v: the level
+        mu |N| and the level R, each times -tanh(v/eps)."""
+        s = SLIP(v, self.eps)
+        return -LEVEL(self.mu, n, 0.0) * s, -LEVEL(0.0, 0.0, self.resistance) * s
 
     def _moving(self, mbs, record: bool):
         """(tangential force f on the slider, global axis, lever r_S - r_G) at the current state, moving guide."""
@@ -126,8 +142,7 @@ class GuideFriction(RecordedFriction):
         lever = (rs[0] - rg[0], rs[1] - rg[1])
         v = axis[0] * (vs[0] - vg[0] + omega * lever[1]) + axis[1] * (vs[1] - vg[1] - omega * lever[0])
         n = self.guard.value(mbs) if record else self.guard.peek(mbs)
-        s = math.tanh(v / self.eps)
-        coulomb, resistance = -self.mu * abs(n) * s, -self.resistance * s
+        coulomb, resistance = self.law(n, v)
         if record:
             self.last = (n, v, coulomb, resistance)
         return coulomb + resistance, axis, lever
@@ -165,8 +180,7 @@ class PinFriction(RecordedFriction):
         rates = [0.0 if n is None else mbs.GetNodeOutput(n, OVT.AngularVelocity)[2] for n in self.nodes]
         omega = rates[0] - rates[1]
         r = self.guard.value(mbs) if record else self.guard.peek(mbs)
-        tau = -(self.coefficient * math.sqrt(r * r + self.delta * self.delta) + self.resistance) \
-            * math.tanh(omega / self.eps)
+        tau = -LEVEL(self.coefficient, NORM(r, 0.0, self.delta), self.resistance) * SLIP(omega, self.eps)
         if record:
             self.last = (r, omega, tau)
         return tau

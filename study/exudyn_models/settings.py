@@ -69,7 +69,7 @@ SEED_MAX_ITERATIONS = 40
 #: 'tuned': what Exudyn's documentation and examples recommend for speed (symbolic user functions,
 #: ``exudyn.symbolic``, instead of Python ones wherever Exudyn has an element whose user function sees
 #: the law's inputs; modified Newton, i.e. the Jacobian reused while the iteration contracts). See
-#: CONFIGURATION_DESCRIPTIONS and study.exudyn_models.translate for what stays Python and why.
+#: CONFIGURATION_DESCRIPTIONS and study.exudyn_models.loads for what stays Python and why.
 CONFIGURATIONS = ("python", "tuned")
 CONFIGURATION_DESCRIPTIONS = {
     "python": "load laws as Python user functions (LoadForceVector/LoadTorqueVector), full Newton",
@@ -194,7 +194,7 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
         ``timeIntegration.computeLoadsJacobian``: 2 differentiates the user-function loads
         numerically w.r.t. position and velocity coordinates (needed for the regularized friction:
         with 0, Newton diverges on tanh(v/1e-3) friction); 0 leaves loads out of the Jacobian
-        (the translator says when that is enough: study.exudyn_models.translate.loads_jacobian).
+        (the translator says when that is enough: study.exudyn_models.friction.loads_jacobian).
     configuration : one of CONFIGURATIONS
         'tuned' switches on modified Newton with one Jacobian per step (``newton.useModifiedNewton``,
         ``modifiedNewtonJacUpdatePerStep``: the step's Jacobian is reused by its iterations, and

@@ -1,4 +1,5 @@
-"""Running a built Exudyn model: build at the consistent state, seed, solve, and post-process into a SimulationResult."""
+"""Running a built Exudyn model (SolveDynamic with its timing and statistics), and the SimulationResult assembled
+from its per-step series."""
 
 from __future__ import annotations
 
@@ -8,44 +9,12 @@ import exudyn as exu
 import numpy as np
 
 from study.results import SimulationResult, package_versions
-from study.exudyn_models.guards import RecordedFriction, initialize, seed_reaction_guards
 from study.exudyn_models.building import Model
-from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, IMPLICIT_SOLVERS, LINEAR_SOLVER_DESCRIPTIONS,
-                                          NEWTON_TOLERANCE, SOLVER_DESCRIPTIONS, SOLVER_TYPES, SPECTRAL_RADIUS,
-                                          RunGrid, check_arguments, exudyn_version, simulation_settings)
+from study.exudyn_models.guards import RecordedFriction
+from study.exudyn_models.settings import (CONFIGURATION_DESCRIPTIONS, LINEAR_SOLVER_DESCRIPTIONS, NEWTON_TOLERANCE,
+                                          SOLVER_DESCRIPTIONS, SOLVER_TYPES, SPECTRAL_RADIUS, RunGrid, exudyn_version)
 
 Array = np.ndarray
-
-
-# ``build(mechanism, q0, qd0, friction, eps)`` returns an object with ``model`` (Model), ``frictions``
-# (list of RecordedFriction: the guides' and pins' friction laws), ``loads_jacobian`` (0 or 2), ``initial_values()``
-# -> (qdd, lam) and ``result(eom, grid, solver, stats)`` -> SimulationResult (see study.exudyn_models.translate).
-def run_model(build, mechanism, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
-              eps: float, configuration: str = "python", ignore_singular: bool = False,
-              linear_solver: str = "dense", newton_tolerance: float = NEWTON_TOLERANCE) -> SimulationResult:
-    """Build the model of a :class:`study.mechanisms.Mechanism` at its in-house consistent initial state, solve it,
-    return its result."""
-    grid = check_arguments(t_end, h, solver, output_step, friction, eps, configuration, linear_solver, ignore_singular,
-                           newton_tolerance)
-    eom = mechanism.equations()
-    state0 = mechanism.initial_state()
-    built = build(mechanism, state0.q, state0.qd, friction, eps, configuration)
-    settings = simulation_settings(grid, solver, built.loads_jacobian, configuration, ignore_singular, linear_solver,
-                                   newton_tolerance)
-    stats = {"configuration": configuration, "linear_solver": linear_solver, "newton_tolerance": newton_tolerance}
-    if solver in IMPLICIT_SOLVERS:
-        stats.update(seed_reaction_guards(built.model, settings, built.frictions))
-    stats.update(solve(built.model, settings, solver))
-    return built.result(eom, grid, solver, stats)
-
-
-def initial_accelerations(build, mechanism, q, qd, friction: str, eps: float) -> tuple[Array, Array]:
-    """Accelerations and multipliers at a state, from Exudyn's solver initialization alone."""
-    check_arguments(1.0, 1.0, "index3", None, friction, eps)
-    built = build(mechanism, q, qd, friction, eps)
-    settings = simulation_settings(RunGrid(1.0, 1.0, 1, 1), "index3", built.loads_jacobian)
-    seed_reaction_guards(built.model, settings, built.frictions)
-    return initialize(built.model, settings, built.initial_values)
 
 
 # --------------------------------------------------------------------------------------------
@@ -88,15 +57,6 @@ def friction_history(fric: RecordedFriction, grid: RunGrid, stats: dict) -> Arra
                            f"row per step plus t = 0")
     stats.update(friction_user_function_calls=fric.guard.calls, friction_guard_substitutions=fric.guard.substitutions)
     return hist
-
-
-def joint_forces(model: Model, grid: RunGrid, joints) -> dict[str, Array]:
-    """``joint_<J>_x/_y``: global force of each revolute joint J on its distal body, at every step."""
-    out = {}
-    for joint in joints:
-        f = -model.series((joint, "force"), grid)
-        out[f"joint_{joint}_x"], out[f"joint_{joint}_y"] = f[:, 0], f[:, 1]
-    return out
 
 
 def cumulative_trapezoid(y: Array, t: Array) -> Array:

@@ -192,6 +192,7 @@ def test_initial_reactions_at_zero_velocity_agree_to_round_off(name, variant, kw
     ("quick_return", "smooth_cutting", {}),
     ("slider_crank", "sustained_sliding", dict(friction="none")),
     ("four_bar", "seed", {}),
+    ("a01_pendulum", "seed", {}),     # a distance constraint: its Exudyn output is a scalar
 ])
 def test_initial_accelerations_and_multipliers_match_inhouse(name, variant, kwargs):
     """Every mechanism at its consistent initial state (velocities on, frictionless): Exudyn's
