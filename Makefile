@@ -10,7 +10,7 @@ export PYTHONHASHSEED := 0
 .PHONY: test reproduce verify emulate run errata initial report bench browser check-report clean-cache lock
 
 # Exact versions from requirements.lock, then the package itself without resolving anything again.
-$(STAMP): requirements.lock pyproject.toml
+$(STAMP): requirements.lock pyproject.toml setup.py
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -r requirements.lock

@@ -31,8 +31,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from study.arguments import shown
-
-REFERENCE_DIR = Path(__file__).resolve().parent.parent / "reference"
+from study.locations import REFERENCE_DIR  # the study's data folder (re-exported: params.REFERENCE_DIR)
 
 # Validation rules, by name. Each returns None when the value is fine, else what is wrong.
 POSITIVE = "positive"          # finite and > 0 (masses, lengths, inertias, g)
@@ -221,7 +220,7 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
     variant : str
         A key of the file's ``[variants]`` table; ``'seed'`` is the paper's set.
     reference_dir : Path, optional
-        Folder holding ``<mechanism>.toml``; defaults to the repository's ``reference/``.
+        Folder holding ``<mechanism>.toml``; defaults to the study's data (:data:`study.locations.REFERENCE_DIR`).
 
     Raises
     ------

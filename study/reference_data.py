@@ -9,7 +9,7 @@ from __future__ import annotations
 import tomllib
 from functools import lru_cache
 
-from study.params import REFERENCE_DIR
+from study.locations import REFERENCE_DIR
 
 
 @lru_cache(maxsize=None)

@@ -40,7 +40,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from study.params import REFERENCE_DIR
+from study.locations import REFERENCE_DIR
 from study.pipeline import (CASES_DIR, Case, MissingResult, Store, load_case_lists, make_executor, run_cases,
                             write_tables)
 from study.pipeline.summaries import energy_flags

@@ -9,12 +9,12 @@ the benchmark walks it. The targets the measurements are judged against are in
 
 from __future__ import annotations
 
-from pathlib import Path
 
-from study.pipeline import CASES_DIR, Case, CaseList, load_case_list
+from study.locations import CASES_DIR, REPORTS_DIR
+from study.pipeline import Case, CaseList, load_case_list
 from study.solver.friction import DEFAULT_EPS
 
-OUT = Path(__file__).resolve().parents[2] / "reports" / "benchmarks"
+OUT = REPORTS_DIR / "benchmarks"
 #: The benchmark's runs (a standalone case list: only ``study bench`` runs it).
 CASE_LIST: CaseList = load_case_list(CASES_DIR / "bench.toml")
 #: The benchmark's own store of saved runs, a folder of the cache root: its runs are timed one at a time in

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from study.params import REFERENCE_DIR
+from study.locations import REFERENCE_DIR
 
 FORMULAS_PATH = REFERENCE_DIR / "printed_formulas.toml"
 KINDS = ("expression", "generalized_force", "potential", "equation", "sparse", "initial_conditions")

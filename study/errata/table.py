@@ -16,11 +16,11 @@ from study.errata.judge import VERDICTS, check_formula
 from study.errata.latex import DIFFERENCE_COLOR
 from study.errata.printed import load_printed
 from study.integrity import atomic_write, sha256_file
-from study.params import REFERENCE_DIR
+from study.locations import REFERENCE_DIR, REPORTS_DIR
 from study.report.render import md_escape, md_math, md_table
 from study.sources import source_files, source_hash
 
-DEFAULT_OUT_DIR = Path(__file__).resolve().parents[2] / "reports" / "tables"
+DEFAULT_OUT_DIR = REPORTS_DIR / "tables"
 COLUMNS = ("formula", "paper", "equation", "verdict", "printed", "derived", "derived_latex", "difference_latex",
            "note")
 

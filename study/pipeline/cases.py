@@ -55,12 +55,11 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from study import arguments
+from study.locations import CASES_DIR
 from study.mechanisms import is_user_file, named_mechanism
-from study.params import REFERENCE_DIR
 from study.pipeline.keys import code_version, mechanism_hash
 from study.reference_data import tolerance
 
-CASES_DIR = REFERENCE_DIR / "cases"
 ENGINES = ("inhouse", "exudyn")
 _GROUP_KEYS = {"name", "engine", "mechanism", "variant", "t_end", "options", "sweep", "exclude", "backend",
                "reference_sample", "expect_error"}

@@ -24,16 +24,16 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from study.integrity import atomic_write
+from study.locations import REPORTS_DIR
 from study.simulate import one_blas_thread
 
 VARIANTS = (("seed", 2.0), ("n5", 2.0), ("n10", 2.0), ("n20", 1.0), ("n40", 1.0))
-OUT = Path(__file__).resolve().parents[2] / "reports" / "tables" / "singular_four_bar_scaling.csv"
+OUT = REPORTS_DIR / "tables" / "singular_four_bar_scaling.csv"
 
 
 @one_blas_thread
