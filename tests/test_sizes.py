@@ -36,7 +36,7 @@ KNOWN = {
     "model/joints.py": 506,
     "model/joints.py::Description.validate": 138,
     "params.py::parse_parameters": 104,
-    "pipeline/cases.py": 490,
+    "pipeline/cases.py": 489,
     "pipeline/orchestrate.py::run_pipeline": 81,
     "report/sections/benchmarks.py::section": 112,
     "report/sections/beyond_papers.py::_n_four_bar": 133,
