@@ -10,7 +10,6 @@ fails its checks. The exception the file raised is the ``__cause__`` (shown with
 
 from __future__ import annotations
 
-import importlib.util
 import inspect
 import traceback
 from pathlib import Path
@@ -67,11 +66,12 @@ def python_file(path: str | Path) -> Path:
 
 
 def _run(path: Path) -> ModuleType:
-    """The user's file run as a module of its own (not in sys.modules)."""
-    spec = importlib.util.spec_from_file_location(f"user_mechanism_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
+    """The user's file run as a module of its own (not in sys.modules; compiled here, so that nothing, not even a
+    __pycache__, is written beside it)."""
+    module = ModuleType(f"user_mechanism_{path.stem}")
+    module.__file__ = str(path)
     try:
-        spec.loader.exec_module(module)
+        exec(compile(path.read_bytes(), str(path), "exec"), module.__dict__)  # noqa: S102 - the user's own file
     except SyntaxError as exc:   # IndentationError too
         where = "" if exc.filename in (None, str(path)) else f" in {exc.filename}"
         raise UserFileError(f"{path}: syntax error{where} at line {exc.lineno}: {exc.msg}") from exc

@@ -12,6 +12,7 @@ import textwrap
 from pathlib import Path
 
 from round3 import OK, add
+from study.errors import UserFileError
 
 G = "a user's file"
 
@@ -95,17 +96,6 @@ def command(verb, source=GOOD, *tail, **kw):
         return [verb, str(path), *extra, *tail, *out]
     return action
 
-
-def error():
-    from study.errors import UserFileError
-
-    return UserFileError
-
-
-try:
-    UserFileError = error()
-except ImportError:   # before the change: the tries are graded against the class they will need
-    UserFileError = type("UserFileError", (ValueError,), {})
 
 RAISES = GOOD.replace("    p = d.p\n", "    p = d.p\n    scale = 1 / 0\n")
 add(G, "describe_raises_library", library(RAISES), UserFileError, "pend.py", "describe", line_of(RAISES, "1 / 0"),
