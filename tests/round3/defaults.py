@@ -174,3 +174,18 @@ def sizes_are_python_ints(tmp):
 
 
 add(G, "lib_numpy_integers_accepted", numpy_integers, OK, then=sizes_are_python_ints)
+
+
+def numpy_worker_count(tmp):
+    """The pipeline's worker count as a numpy integer: one worker runs the cases in this process."""
+    from study.pipeline.executors import InlineExecutor, make_executor
+
+    with make_executor(np.int64(1)) as pool:
+        (tmp / "pool.json").write_text(json.dumps(isinstance(pool, InlineExecutor)))
+
+
+def runs_inline(tmp):
+    assert json.loads((tmp / "pool.json").read_text()) is True
+
+
+add(G, "lib_numpy_worker_count_accepted", numpy_worker_count, OK, then=runs_inline)
