@@ -7,9 +7,12 @@ ValueError (so the command line reports it in one line) and returns the value co
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import math
 import numbers
+import re
+from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
@@ -89,3 +92,33 @@ def state(where: str, value: Any, size: int, names: Iterable[str] = ()) -> np.nd
     if not np.isfinite(array).all():
         raise ValueError(f"{where} = {array} must be finite")
     return array
+
+
+def per_constraint(method: str, options: dict, eom) -> None:
+    """A method option given as one value per constraint (sliding mode's Lambda, K, k) has one per constraint of
+    ``eom``."""
+    r = eom.n_constraints
+    for key, value in options.items():
+        if isinstance(value, (list, tuple, np.ndarray)) and len(value) != r:
+            raise ValueError(f"{method}: {key} has {len(value)} values (one per constraint), but {eom.name} has {r} "
+                             f"constraint{'s' if r != 1 else ''} ({', '.join(eom.constraint_names)})")
+
+
+def output_path(where: str, value: str) -> Path:
+    """An output path as given on the command line, refused before any work if it is empty (Path('') is '.')."""
+    if not value.strip():
+        raise ValueError(f"{where} {value!r} is empty: give the path of the output (e.g. {where} runs/x)")
+    return Path(value)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse's parser, but a negative number in any form (-1e-3, -.5, -inf) is a value, not a flag, so that it
+    reaches the option's own check, which names it and says why it is refused (the subcommands' parsers are of the
+    same class). argparse's own test, ``_negative_number_matcher``, knows only -1 and -1.5."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
+
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)

@@ -12,6 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from study import arguments
 from study.pipeline import CASES_DIR
 
 REPORTS = Path("reports")
@@ -54,10 +55,12 @@ def _errata(args: argparse.Namespace) -> int:
 
 
 def _friction_text(result, chosen_by_default: bool) -> str:
-    """How friction ran, for the one-line summary: treatment, settings and whether it was the default."""
+    """How friction ran, for the one-line summary: treatment, settings, whether it was the default, and the friction
+    entries a run without friction left out."""
     name = result.meta.get("friction")
+    left_out = result.meta.get("friction_left_out") or []
     if name is None:
-        text = "friction none"
+        text = "friction none" + (f" (asked: the friction of {', '.join(left_out)} left out)" if left_out else "")
     elif name == "regularized":
         text = f"friction regularized ({result.meta.get('friction_sgn', '?')}, eps = {result.meta['friction_eps']:g} m/s)"
     elif name == "sign":
@@ -65,16 +68,6 @@ def _friction_text(result, chosen_by_default: bool) -> str:
     else:
         text = f"friction {name}"
     return text + (" [parameter set's default]" if chosen_by_default else "")
-
-
-def _default_friction(eom) -> str:
-    """The friction ``simulate`` applies unless told otherwise: 'exact' (event-located stick/slip) when
-    a sliding contact of ``eom`` has a nonzero Coulomb coefficient or resistance, else 'none'.
-
-    (Here, not in study.simulate, whose source is part of every in-house case key.)
-    """
-    active = any(c.mu_static or c.mu_kinetic or c.resistance for c in eom.contacts)
-    return "exact" if active else "none"
 
 
 # simulate()'s arguments set by a flag of the simulate command (an --option must not set them again)
@@ -112,8 +105,10 @@ def method_options(items: list[str] | None, method: str) -> dict:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from study.simulate import DEFAULT_OUTPUT_STEP, check_arguments, resolve, simulate
+    from study.simulate import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments, default_friction, resolve, \
+        simulate
 
+    out = arguments.output_path("--out", args.out)
     options = method_options(args.option, args.method)
     target = args.mechanism
     if target.endswith(".py"):   # a user's mechanism file: its own parameter set, the variant chosen here
@@ -126,16 +121,17 @@ def _simulate(args: argparse.Namespace) -> int:
     run["output_step"] = DEFAULT_OUTPUT_STEP if args.output_step is None else args.output_step
     if not isinstance(target, str):   # the file's parameter set is already the chosen variant
         run["variant"] = None
-    if run["friction"] is None:  # the parameter set's friction: exact stick/slip where a contact has friction
-        run["friction"] = _default_friction(resolve(target, run["variant"])[0])
-    if run["friction"] == "none":
-        run["friction"] = None
+    if run["friction"] is None:  # the parameter set's treatment of every friction entry (contacts and pins)
+        eom, mech = resolve(target, run["variant"])
+        run["friction"] = default_friction(eom, None if mech is None else mech.parameters) or "none"
     check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
                     names=SIMULATE_FLAGS)
-    _writable(args.out, "--out")
+    _writable(out, "--out")
+    if args.friction is None:   # checked with the treatment it stands for; the run records that it was the default
+        run["friction"] = DEFAULT_FRICTION
     result = simulate(target, **run, **options,
                       progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None)
-    path = result.save(args.out)
+    path = result.save(out)
     s = result.summary()
     print(f"{args.mechanism}/{args.variant} {args.method} {args.integrator} ({args.backend}), "
           f"{_friction_text(result, args.friction is None)}: max|Phi| = {s['max_abs_phi']:.3e}, "
@@ -338,7 +334,7 @@ def _verify(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m study", description=__doc__)
+    parser = arguments.Parser(prog="python -m study", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     for name, func, text in (
         ("initial", _initial, "consistent initial conditions and the printed ones' residuals"),
@@ -401,8 +397,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", default=defaults["backend"], choices=list(BACKENDS),
                    help=f"reference: Python + scipy; compiled: numba, described mechanisms (default {defaults['backend']})")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
-                   help="Coulomb friction at the sliding contacts (default: the parameter set's, i.e. exact "
-                        "stick/slip where a contact has friction, else none)")
+                   help="Coulomb friction at the sliding contacts and pins (default: the parameter set's treatment "
+                        "of every entry with friction: its friction_treatment if it states one, else exact stick/slip; "
+                        "none where no entry has friction)")
     p.add_argument("--friction-eps", type=float, default=None, metavar="EPS",
                    help=f"regularization width [m/s] of 'regularized', stick band of 'sign' (default {DEFAULT_EPS:g})")
     p.add_argument("--friction-sgn", default=None, choices=[k for k in SIGN_FUNCTIONS if k != "sign"],
@@ -417,7 +414,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"spacing of the saved samples [s] (default {DEFAULT_OUTPUT_STEP:g})")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",
                    help="option of the --method, e.g. omega=10, d=1, Lambda=10, sgn=tanh, width=1e-8, max_iter=5")
-    p.add_argument("--out", type=Path, required=True, help="output path (writes .csv and .json)")
+    p.add_argument("--out", required=True, help="output path (writes .csv and .json)")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("describe", help="print a mechanism's bodies, joints, loads, variants and consistent initial state")

@@ -32,6 +32,11 @@ class RunTooLargeError(ValueError):
     """A run whose estimated cost exceeds its bounds, refused before it starts (the message has the estimate)."""
 
 
+class UserFileError(ValueError):
+    """A user's mechanism file (``describe(ps)`` in ``<name>.py``) could not give a mechanism: the message names the
+    file, the function, the line and the cause; an exception the file raised is the ``__cause__``."""
+
+
 class ResultIntegrityError(ValueError):
     """A saved result (or generated file, or table) does not match the checksum recorded with it."""
 

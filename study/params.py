@@ -114,7 +114,8 @@ class ParameterSet:
         try:
             return getattr(values, name)
         except AttributeError:
-            raise AttributeError(f"parameter set {self.mechanism}/{self.variant} has no field {name!r}") from None
+            raise AttributeError(f"parameter set {self.mechanism}/{self.variant} has no field {name!r}", name=name,
+                                 obj=self) from None
 
 
 def available_mechanisms(reference_dir: Path | None = None) -> tuple[str, ...]:
@@ -178,10 +179,20 @@ def _extended(raw: dict[str, Any], path: Path, problem, seen: tuple[Path, ...] =
 
 
 def _path_for(mechanism: str, reference_dir: Path | None) -> Path:
+    if reference_dir is not None and not Path(reference_dir).is_dir():
+        what = "is not a folder" if Path(reference_dir).exists() else "does not exist"
+        raise ParameterError(f"reference_dir = {reference_dir} {what} (it is the folder of the parameter files "
+                             f"<mechanism>.toml)")
     known = available_mechanisms(reference_dir)
+    path = Path(reference_dir or REFERENCE_DIR) / f"{mechanism}.toml"
     if mechanism not in known:
-        raise ParameterError(f"unknown mechanism {mechanism!r}; valid choices: {', '.join(known)}")
-    return (reference_dir or REFERENCE_DIR) / f"{mechanism}.toml"
+        if path.is_file():   # there, but it names another mechanism (or is not valid TOML: _parsed names the file)
+            meta = _parsed(path).get("meta", {})
+            named = meta.get("mechanism") if isinstance(meta, dict) else None
+            raise ParameterError(f"{path}: [meta] mechanism = {named!r} must be {mechanism!r}, the file's name")
+        where = "" if reference_dir is None else f" ({path} does not exist)"
+        raise ParameterError(f"unknown mechanism {mechanism!r}{where}; valid choices: {', '.join(known) or 'none'}")
+    return path
 
 
 def _read(path: Path) -> dict[str, Any]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from typing import Callable, Mapping
@@ -13,6 +14,7 @@ from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.errors import RunTooLargeError
 from study.fast.support import SCIPY_STEPS_ONLY, check_supported
+from study.friction_default import DEFAULT_FRICTION, default_friction, friction_entries, treatment
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
@@ -24,8 +26,8 @@ from study.solver.integrate import INTEGRATORS, integrate
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import Stabilization, check_options
 
-__all__ = ["BACKENDS", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", "INTEGRATOR_NAMES", "build_dynamics", "check_run_size",
-           "resolve", "simulate", "simulate_methods"]
+__all__ = ["BACKENDS", "DEFAULT_FRICTION", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", "INTEGRATOR_NAMES", "build_dynamics",
+           "check_run_size", "default_friction", "friction_entries", "resolve", "simulate", "simulate_methods"]
 
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
@@ -91,7 +93,7 @@ def simulate(
     acceleration_solver: str | None = None,
     variant: str | None = None,
     progress: Callable[[float], None] | None = None,
-    friction: str | None = None,
+    friction: str | None = DEFAULT_FRICTION,
     friction_eps: float | None = None,
     friction_sgn: str | None = None,
     resistance_reading: str | None = None,
@@ -135,9 +137,10 @@ def simulate(
         monitor).
     output_step : float
         Spacing of the saved samples [s].
-    friction : {None, 'exact', 'regularized', 'sign'}
-        Coulomb friction at the equations' sliding contacts (``study.solver.friction``); None ignores
-        the contacts' friction data. 'exact': event-located stick/slip; 'regularized': sgn replaced
+    friction : {'default', 'none', 'exact', 'regularized', 'sign'}
+        Coulomb friction at the sliding contacts and pins (``study.solver.friction``). 'default': the parameter
+        set's treatment of every entry with friction (``study.friction_default``); 'none' (or None) leaves them
+        out, named in ``meta['friction_left_out']``. 'exact': event-located stick/slip; 'regularized': sgn replaced
         by ``friction_sgn`` ('tanh', 'sat', 'arctan', 'sqrt'; default 'tanh') of width ``friction_eps``
         [m/s] (default 1e-3); 'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps``
         also sets the band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. A
@@ -189,12 +192,17 @@ def simulate(
     t_end, step, max_evaluations = given["t_end"], given["step"], given["max_evaluations"]
     rtol = DEFAULT_RTOL if rtol is None else given["rtol"]
     atol = DEFAULT_ATOL if atol is None else given["atol"]
-    friction_eps = DEFAULT_EPS if friction_eps is None else given["friction_eps"]
-    friction_sgn = "tanh" if friction_sgn is None else friction_sgn
     if not isinstance(method, Stabilization):
         method_options = check_options(method, method_options)
     eom, mech = resolve(eom_or_mechanism, variant)
     ps = None if mech is None else mech.parameters
+    arguments.per_constraint(getattr(method, "name", method), _options_of(method, method_options), eom)
+    by_default = friction == DEFAULT_FRICTION
+    friction = treatment(eom, ps, friction, given, integrator=integrator, friction_eps=friction_eps,
+                         friction_sgn=friction_sgn, backend=backend)
+    friction_eps = DEFAULT_EPS if friction_eps is None else given["friction_eps"]
+    friction_sgn = "tanh" if friction_sgn is None else friction_sgn
+    stated = {"friction_default": by_default, "friction_left_out": [] if friction else friction_entries(eom)}
     index3 = integrator == INDEX3
     if index3 and eom.indicators is not None:
         raise ValueError(f"integrator 'ALI3P' does not locate the switches of {eom.name}'s discontinuous loads "
@@ -237,11 +245,13 @@ def simulate(
     if not scipy_steps:
         from study.fast import simulate_compiled
 
-        return simulate_compiled(eom, mech, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
-                                 step=step, output_step=output_step, acceleration_solver=acceleration_solver,
-                                 progress=progress, friction=friction, friction_eps=friction_eps,
-                                 friction_sgn=friction_sgn, max_evaluations=max_evaluations, min_step=min_step,
-                                 **method_options)
+        result = simulate_compiled(eom, mech, q0, qd0, t_end, method=method, integrator=integrator, rtol=rtol, atol=atol,
+                                   step=step, output_step=output_step, acceleration_solver=acceleration_solver,
+                                   progress=progress, friction=friction, friction_eps=friction_eps,
+                                   friction_sgn=friction_sgn, max_evaluations=max_evaluations, min_step=min_step,
+                                   **method_options)
+        result.meta.update(stated)
+        return result
 
     dyn, y0, switching = build_dynamics(eom, q0, qd0, method=method, acceleration_solver=acceleration_solver,
                                         friction=friction, friction_eps=friction_eps, friction_sgn=friction_sgn,
@@ -258,7 +268,7 @@ def simulate(
         cpu0 = time.process_time()
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # non-finite states are diagnosed
             traj, stats = integrate_index3(dyn, y0, float(t_end), t_out, step, ALI3P(), progress)
-        return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=None,
+        return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, stated, integrator=integrator, rtol=None,
                        atol=None, step=step, acceleration_solver=acceleration_solver, output_step=output_step,
                        t_end=t_end, stabilization=stabilization, law=law)
 
@@ -286,9 +296,16 @@ def simulate(
              **dyn.accelerations.statistics()}
     if switching is not None:
         stats["friction_transitions"] = switching.transitions
-    return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, integrator=integrator, rtol=rtol, atol=atol,
-                   step=step, acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
+    return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, stated, integrator=integrator, rtol=rtol,
+                   atol=atol, step=step, acceleration_solver=acceleration_solver, output_step=output_step, t_end=t_end,
                    stabilization=stabilization, law=law, backend=backend)
+
+
+def _options_of(method, options: dict) -> dict:
+    """A method's options: those given with its name, or the fields of a Stabilization object."""
+    if isinstance(method, Stabilization) and dataclasses.is_dataclass(method):
+        return {f.name: getattr(method, f.name) for f in dataclasses.fields(method)}
+    return {} if isinstance(method, Stabilization) else options
 
 
 def simulate_methods(eom_or_mechanism: EquationsOfMotion | str, q0=None, qd0=None, t_end: float = 1.0, *,
@@ -297,14 +314,13 @@ def simulate_methods(eom_or_mechanism: EquationsOfMotion | str, q0=None, qd0=Non
     return {method: simulate(eom_or_mechanism, q0, qd0, t_end, method=method, **options) for method in methods}
 
 
-def _result(dyn, traj, stats: dict, cpu: float, eom: EquationsOfMotion, ps, **settings) -> SimulationResult:
-    """The samples of a run as a SimulationResult, with its statistics and settings."""
+def _result(dyn, traj, stats: dict, cpu: float, eom: EquationsOfMotion, ps, stated: dict, **settings):
+    """The samples of a run as a SimulationResult, with its statistics, settings and what ``stated`` adds."""
     nfev = dyn.nfev  # the evaluations of the run, before the samples' post-processing adds its own
     result = assemble_result(dyn, traj.t, traj.y, traj.modes)
     result.stats.update({"nfev": nfev, **stats, "cpu_seconds": cpu})
-    result.meta.update(run_metadata(eom, ps, **settings))
+    result.meta.update(run_metadata(eom, ps, **settings), **stated)
     return result
-
 
 
 def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step, acceleration_solver, variant,
@@ -338,7 +354,8 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
     arguments.choice(w("integrator"), integrator, INTEGRATOR_NAMES)
     arguments.choice(w("acceleration_solver"), acceleration_solver, ACCELERATION_SOLVERS, optional=True)
     arguments.choice(w("backend"), backend, BACKENDS)
-    arguments.choice(w("friction"), friction, FRICTION_TREATMENTS, optional=True)
+    arguments.choice(w("friction"), friction, [*FRICTION_TREATMENTS, "none", DEFAULT_FRICTION], optional=True)
+    friction = None if friction == "none" else friction
     if friction_sgn == "sign":
         raise ValueError(f"{w('friction_sgn')} = 'sign' is not a smooth sgn (the plain sgn is {w('friction')}='sign'); "
                          f"valid choices: {', '.join(k for k in SIGN_FUNCTIONS if k != 'sign')}")
@@ -365,7 +382,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
                           (w("acceleration_solver"), acceleration_solver, "it is its own augmented Lagrangian",
                            acceleration_solver is not None),
                           (w("friction"), friction, f"its steps do not locate stick/slip switches; run it with {w('friction')} none",
-                           friction is not None),
+                           friction not in (None, DEFAULT_FRICTION)),   # the default: checked once it is known
                           (w("backend"), backend, "it runs on the reference backend", backend != "reference")]
         for name, value, why, given_here in not_for_index3:
             if given_here:
@@ -373,6 +390,8 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
     if given["output_step"] > t_end:
         raise ValueError(f"{w('output_step')} = {output_step:g} s is longer than {w('t_end')} = {t_end:g} s (the result "
                          f"would hold only t = 0 and t_end)")
+    if friction == DEFAULT_FRICTION:   # the parameter set's treatment: its combinations are checked once it is known
+        return given
     if friction_eps is not None and friction not in ("regularized", "sign"):
         raise ValueError(f"{w('friction_eps')} = {friction_eps!r} applies to friction 'regularized' (its width) and "
                          f"'sign' (its stick band); {w('friction')} = {friction or 'none'} has no width")

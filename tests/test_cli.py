@@ -55,8 +55,10 @@ def test_simulate_applies_the_parameter_sets_friction_by_default(tmp_path, capsy
     exact, exact_line = _run(tmp_path, capsys, "exact", "--friction", "exact")
     none, none_line = _run(tmp_path, capsys, "none", "--friction", "none")
     assert "friction exact [parameter set's default]" in line
-    assert "friction exact:" in exact_line and "friction none:" in none_line
+    assert "friction exact:" in exact_line and "friction none (asked: the friction of guide left out):" in none_line
     assert default.meta["friction"] == exact.meta["friction"] == "exact" and none.meta["friction"] is None
+    assert (default.meta["friction_default"], exact.meta["friction_default"]) == (True, False)
+    assert none.meta["friction_left_out"] == ["guide"] and default.meta["friction_left_out"] == []
     # the default run is the exact run, sample for sample, and not the frictionless one
     np.testing.assert_array_equal(default.q, exact.q)
     np.testing.assert_array_equal(default.forces["friction_guide"], exact.forces["friction_guide"])
@@ -99,8 +101,10 @@ def test_simulate_passes_variant_backend_and_friction(monkeypatch, tmp_path):
     assert main(base + ["--variant", "slip_then_stick", "--backend", "compiled", "--friction", "sign",
                         "--friction-eps", "2e-3"]) == 2
     assert main(base + ["--case", "sustained_sliding", "--friction", "none"]) == 2
+    assert main(base + ["--case", "sustained_sliding"]) == 2
     assert [(k["variant"], k["backend"], k["friction"], k["friction_eps"]) for k in seen] == [
-        ("slip_then_stick", "compiled", "sign", 2e-3), ("sustained_sliding", "reference", None, None)]
+        ("slip_then_stick", "compiled", "sign", 2e-3), ("sustained_sliding", "reference", "none", None),
+        ("sustained_sliding", "reference", "default", None)]
 
 
 @pytest.mark.parametrize("args,message", [

@@ -178,7 +178,7 @@ def test_seeded_initial_accelerations_carry_the_pin_friction(runs, name):
 def test_friction_none_leaves_the_pin_torque_out(runs):
     """friction='none': no torque, no work, and the frictionless motion of the in-house reference at order 2."""
     mech, t_end, _, _, _ = runs["pendulum"]
-    ref = reference(mech, t_end)
+    ref = reference(mech, t_end, friction="none")
     errors: dict[str, list[float]] = {"q": [], "qd": []}
     for h in STEPS:
         x = study.exudyn_run(mech, t_end, h, solver="index2", output_step=OUTPUT_STEP, friction="none", eps=EPS)

@@ -388,10 +388,19 @@ def test_exact_friction_with_switched_cutting_law():
 
 
 def test_no_friction_ignores_contacts():
-    plain = simulate("slider_crank", variant="sustained_sliding", t_end=0.5)
+    plain = simulate("slider_crank", variant="sustained_sliding", t_end=0.5, friction="none")
     again = simulate("slider_crank", variant="sustained_sliding", t_end=0.5, friction=None)
     np.testing.assert_array_equal(plain.q, again.q)
     assert plain.forces == {} and "work_friction_guide" not in plain.energies
+    assert plain.meta["friction_left_out"] == again.meta["friction_left_out"] == ["guide"]
+
+
+def test_the_default_is_the_parameter_sets_friction():
+    """Without friction=, the contact's friction runs (exact stick/slip), the same run as friction='exact'."""
+    default = simulate("slider_crank", variant="sustained_sliding", t_end=0.5)
+    exact = simulate("slider_crank", variant="sustained_sliding", t_end=0.5, friction="exact")
+    np.testing.assert_array_equal(default.q, exact.q)
+    assert default.meta["friction"] == "exact" and default.energies["work_friction_guide"][-1] < 0
 
 
 def test_bad_friction_options():

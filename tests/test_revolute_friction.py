@@ -356,7 +356,8 @@ def test_unconverged_torque_solve_names_joint_time_and_state(mech, monkeypatch):
 
 
 def test_friction_none_ignores_the_pin_friction(mech):
-    r = study.simulate(mech, t_end=0.2, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP)
+    r = study.simulate(mech, t_end=0.2, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2, output_step=OUTPUT_STEP,
+                       friction="none")
     e = r.energies
     assert abs(e["kinetic"][-1] + e["potential"][-1] - e["kinetic"][0] - e["potential"][0]) < 1e-6
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import importlib.util
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -125,21 +124,12 @@ def mechanism(ps: ParameterSet) -> Mechanism:
 
 
 def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
-    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it."""
-    path = Path(path).resolve()
-    if path.suffix != ".py" or not path.is_file():
-        raise ValueError(f"{path} is not a Python file (a user's mechanism: describe(ps) in <name>.py, its parameters "
-                         f"in <name>.toml beside it)")
-    spec = importlib.util.spec_from_file_location(f"user_mechanism_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    if not callable(getattr(module, "describe", None)):
-        raise ValueError(f"{path.name} defines no describe(ps) returning a study.Description")
-    ps = load_parameters(path.stem, variant, reference_dir=path.parent)
-    guess = None
-    if callable(getattr(module, "initial_guess", None)):
-        guess = np.asarray(module.initial_guess(ps)[0], dtype=float)
-    return Mechanism(module.describe(ps), ps, guess)
+    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
+    (:mod:`study.user_mechanism`: whatever is wrong in the file is one UserFileError naming the file, the function,
+    the line and the cause)."""
+    from study.user_mechanism import load_mechanism as load
+
+    return load(path, variant)
 
 
 def is_user_file(name: str) -> bool:

@@ -11,6 +11,7 @@ or be written by hand from plain callables.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 from typing import Callable, Mapping
 
@@ -146,6 +147,10 @@ class EquationsOfMotion:
     kinematics: Mapping[str, Callable[..., Array]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for key in ("n_coordinates", "n_constraints"):   # numpy's integers too, kept as Python ints
+            value = getattr(self, key)
+            if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+                object.__setattr__(self, key, int(value))
         m, r = self.n_coordinates, self.n_constraints
         problems = []
         if not isinstance(m, int) or m < 1:

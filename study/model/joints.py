@@ -201,7 +201,11 @@ class Description:
         return name
 
     def ground(self, name: str, x: Any, y: Any) -> tuple[str, str]:
-        """A named point fixed in the global frame."""
+        """A named point fixed in the global frame (each name once: a second definition would move the first)."""
+        if name in self.ground_points:
+            first = ", ".join(map(str, self.ground_points[name]))
+            raise DescriptionError(f"mechanism {self.name!r}: ground point {name!r} is defined twice (at ({first}) "
+                                   f"and at ({x}, {y})): give each ground point its own name")
         self.ground_points[name] = (sp.sympify(x), sp.sympify(y))
         return (GROUND, name)
 

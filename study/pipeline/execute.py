@@ -123,7 +123,8 @@ def warm_compiled(case: Case) -> None:
     from study.mechanisms import named_mechanism
     from study.simulate import simulate
 
-    simulate(named_mechanism(case.mechanism, case.variant), t_end=1e-3, output_step=1e-3, backend="compiled")
+    simulate(named_mechanism(case.mechanism, case.variant), t_end=1e-3, output_step=1e-3, backend="compiled",
+             friction="none")
 
 
 def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]) -> Iterator[tuple[Case, Future]]:

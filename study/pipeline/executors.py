@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import numbers
 import os
 import socket
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
@@ -46,8 +47,9 @@ def make_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Ex
             if client is not scheduler:
                 client.close()
         return
-    if not isinstance(workers, int) or workers < 1:
+    if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1:
         raise ValueError(f"workers = {workers!r} must be an integer >= 1")
+    workers = int(workers)   # numpy's integers too
     if workers == 1:
         yield InlineExecutor()
         return

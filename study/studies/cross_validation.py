@@ -160,7 +160,7 @@ def friction_label(case: Case) -> str:
         if opts.get("friction", "regularized") == "none" or case.group.split(":")[0].endswith("/frictionless"):
             return "none"
         return f"tanh eps={opts.get('eps', DEFAULT_EPS):g}"
-    if opts.get("friction") is None:
+    if opts.get("friction", "none") == "none":   # the case lists name the frictionless runs of a mechanism with friction
         return "none"
     return f"{opts.get('friction_sgn', 'tanh')} eps={opts.get('friction_eps', DEFAULT_EPS):g}"
 

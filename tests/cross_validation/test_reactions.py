@@ -32,8 +32,10 @@ def tol(key: str) -> float:
 
 @lru_cache(maxsize=None)
 def reference(mechanism, variant, t_end):
+    """The in-house reference without friction, as the Exudyn runs it is compared with (friction='none')."""
     return simulate(mechanism, variant=variant, t_end=t_end, method="projection", integrator="DOP853",
-                    rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"), output_step=OUTPUT_STEP)
+                    rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"), output_step=OUTPUT_STEP,
+                    friction="none")
 
 
 def deviations(mechanism, variant, t_end, solver, steps):
