@@ -198,7 +198,7 @@ def simulate(
     ps = None if mech is None else mech.parameters
     arguments.per_constraint(getattr(method, "name", method), _options_of(method, method_options), eom)
     by_default = friction == DEFAULT_FRICTION
-    friction = treatment(eom, ps, friction, given, integrator=integrator, friction_eps=friction_eps,
+    friction = treatment(eom, ps, friction, given, check_arguments, integrator=integrator, friction_eps=friction_eps,
                          friction_sgn=friction_sgn, backend=backend)
     friction_eps = DEFAULT_EPS if friction_eps is None else given["friction_eps"]
     friction_sgn = "tanh" if friction_sgn is None else friction_sgn

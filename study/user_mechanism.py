@@ -25,12 +25,11 @@ from study.params import ParameterSet, available_mechanisms, load_parameters
 SHAPE = "a user's mechanism: describe(ps) in <name>.py, its parameters in <name>.toml beside it"
 
 
-def load_mechanism(path: str | Path, variant: str = "seed"):
-    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it, as
-    a :class:`study.Mechanism`; a :class:`~study.errors.UserFileError` (or a ParameterError for the ``.toml``) names
-    what is wrong."""
-    from study.mechanisms import Mechanism
-
+def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, ParameterSet, np.ndarray | None]:
+    """What a user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
+    give: the checked description, the parameter set and Newton's start (None: the printed q(0)), from which
+    :func:`study.mechanisms.load_mechanism` makes the Mechanism; a :class:`~study.errors.UserFileError` (or a
+    ParameterError for the ``.toml``) names what is wrong."""
     path = python_file(path)
     module = _run(path)
     describe = getattr(module, "describe", None)
@@ -47,10 +46,11 @@ def load_mechanism(path: str | Path, variant: str = "seed"):
         _takes_the_parameter_set(path, module.initial_guess, "initial_guess")
         guess = _guess(path, _call(path, module.initial_guess, ps, "initial_guess"), _first_line(module.initial_guess))
     try:
-        return Mechanism(d, ps, guess)
+        d.validate()
     except DescriptionError as exc:
         raise UserFileError(f"{path}: describe(ps) at line {_first_line(describe)} returned a description that fails "
                             f"its checks: {exc}") from exc
+    return d, ps, guess
 
 
 def python_file(path: str | Path) -> Path:
@@ -156,10 +156,9 @@ def _kind(value: Any) -> str:
 
 
 def _hint(value: Any) -> str:
-    from study.mechanisms import Mechanism
     from study.model.builder import MechanismBuilder
 
-    if isinstance(value, Mechanism):
+    if isinstance(getattr(value, "description", None), Description):   # a study.Mechanism
         return " (return the description: the Mechanism is made from it and the parameter set)"
     if isinstance(value, MechanismBuilder):
         return (" (a MechanismBuilder is a body-level description for equations of one's own; describe(ps) returns "

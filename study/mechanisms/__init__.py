@@ -24,6 +24,7 @@ from study.model.compile import compile_description
 from study.model.coordinates import COORDINATE_SETS, lower
 from study.model.joints import Description
 from study.params import ParameterSet, available_mechanisms, load_parameters
+from study.user_mechanism import load_parts
 from study.solver.initial import ConsistentState, InitialConditionError, consistent_initial_conditions
 
 
@@ -127,9 +128,7 @@ def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
     """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
     (:mod:`study.user_mechanism`: whatever is wrong in the file is one UserFileError naming the file, the function,
     the line and the cause)."""
-    from study.user_mechanism import load_mechanism as load
-
-    return load(path, variant)
+    return Mechanism(*load_parts(path, variant))
 
 
 def is_user_file(name: str) -> bool:
