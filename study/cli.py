@@ -112,6 +112,7 @@ def method_options(items: list[str] | None, method: str) -> dict:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from study.progress import ProgressPrinter
     from study.simulate import DEFAULT_OUTPUT_STEP, check_arguments, resolve, simulate
 
     options = method_options(args.option, args.method)
@@ -237,25 +238,6 @@ def _writable(path: Path, argument: str, folder: bool = False) -> None:
             pass
     except OSError as exc:
         raise ValueError(f"{argument} {path}: cannot write in {existing} ({exc.strerror or exc})") from None
-
-
-class ProgressPrinter:
-    """``progress=`` for long CLI runs: a line on stderr every few seconds once a run has taken a few seconds."""
-
-    def __init__(self, t_end: float, stream=None):
-        from study.reference_data import tolerance
-
-        self.t_end, self.stream = t_end, stream or sys.stderr
-        self.start = time.perf_counter()
-        self.after, self.interval = tolerance("cli_progress_after"), tolerance("cli_progress_interval")
-        self.next = self.start + self.after
-
-    def __call__(self, t: float) -> None:
-        now = time.perf_counter()
-        if now >= self.next:
-            self.next = now + self.interval
-            print(f"t = {t:.6g} of {self.t_end:g} s ({100 * t / self.t_end:.1f} %), {now - self.start:.0f} s",
-                  file=self.stream, flush=True)
 
 
 def _report(args: argparse.Namespace) -> int:

@@ -391,29 +391,40 @@ def check_run_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_en
     ``output_bytes_per_value`` each; a fixed-step run takes ``EVALUATIONS_PER_STEP`` evaluations per step. The message gives
     the estimate and the argument that raises the bound (the user's confirmation).
     """
-    m, r = eom.n_coordinates, eom.n_constraints
-    n_contacts = len(eom.contacts) + len(getattr(eom, "pin_frictions", ())) if friction is not None else 0
-    columns = 1 + 3 * m + 3 * r + 2 + len(eom.applied_forces(0.0, q0, qd0)) + 4 * n_contacts
-    samples = t_end / output_step + 2
-    nbytes = samples * columns * tolerance("output_bytes_per_value")
+    samples, columns, nbytes = output_size(eom, q0, qd0, t_end, output_step, friction)
     if not nbytes <= max_output_bytes:
         raise RunTooLargeError(
             f"t_end = {t_end:g} s at output_step = {output_step:g} s asks for {samples:.3g} samples of {columns} "
-            f"values, about {_bytes(nbytes)} of memory, above max_output_bytes = {_bytes(max_output_bytes)}: use a "
+            f"values, about {format_bytes(nbytes)} of memory, above max_output_bytes = {format_bytes(max_output_bytes)}: use a "
             f"larger output_step or a shorter t_end, or pass max_output_bytes= to confirm")
     if integrator in FIXED_STEP:
         per_step = EVALUATIONS_PER_STEP[integrator]
-        evaluations = per_step * np.ceil(t_end / step) + 1
+        evaluations = fixed_step_evaluations(integrator, t_end, step)
         if not evaluations <= max_evaluations:
             cpu = evaluations * tolerance("seconds_per_evaluation")
             raise RunTooLargeError(
                 f"{integrator} with step = {step:g} s over t_end = {t_end:g} s takes {evaluations / per_step:.3g} steps "
-                f"= {evaluations:.3g} evaluations (at least {_duration(cpu)} of CPU, ~{_bytes(nbytes)} of output), "
+                f"= {evaluations:.3g} evaluations (at least {_duration(cpu)} of CPU, ~{format_bytes(nbytes)} of output), "
                 f"above max_evaluations = {max_evaluations:g}: pass max_evaluations={evaluations:.0f} "
                 f"(--max-evaluations) to confirm, or use a larger step")
 
 
-def _bytes(n: float) -> str:
+def fixed_step_evaluations(integrator: str, t_end: float, step: float) -> float:
+    """The evaluations of a fixed-step run (known before it starts): EVALUATIONS_PER_STEP per step, and the first."""
+    return EVALUATIONS_PER_STEP[integrator] * np.ceil(t_end / step) + 1
+
+
+def output_size(eom: EquationsOfMotion, q0: np.ndarray, qd0: np.ndarray, t_end: float, output_step: float,
+                friction: str | None) -> tuple[float, int, float]:
+    """A run's output: (samples, columns, estimated bytes); see :func:`check_run_size`."""
+    m, r = eom.n_coordinates, eom.n_constraints
+    n_contacts = len(eom.contacts) + len(getattr(eom, "pin_frictions", ())) if friction is not None else 0
+    columns = 1 + 3 * m + 3 * r + 2 + len(eom.applied_forces(0.0, q0, qd0)) + 4 * n_contacts
+    samples = t_end / output_step + 2
+    return samples, columns, samples * columns * tolerance("output_bytes_per_value")
+
+
+def format_bytes(n: float) -> str:
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
             return f"{n:.3g} {unit}"

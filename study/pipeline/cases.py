@@ -274,7 +274,7 @@ def _check_case(case: Case, where: str) -> None:
 def _check_inhouse_options(options: dict, t_end: float) -> None:
     import inspect
 
-    from study.simulate import check_arguments, simulate
+    from study.simulate import FIXED_STEP, check_arguments, fixed_step_evaluations, simulate
     from study.solver.stabilization import make_stabilization
 
     arguments.choice("initial", options.pop("initial", "consistent"), ("consistent", "printed"))
@@ -295,6 +295,13 @@ def _check_inhouse_options(options: dict, t_end: float) -> None:
     if samples * tolerance("output_bytes_per_value") > tolerance("max_output_bytes"):
         raise ValueError(f"t_end = {t_end:g} s at output_step = {given['output_step']:g} s asks for {samples:.3g} "
                          f"samples, more output than max_output_bytes = {tolerance('max_output_bytes'):g} bytes allows")
+    if run["integrator"] in FIXED_STEP:   # its evaluations are known before it starts
+        evaluations = fixed_step_evaluations(run["integrator"], given["t_end"], given["step"])
+        bound = tolerance("max_evaluations") if given["max_evaluations"] is None else given["max_evaluations"]
+        if evaluations > bound:
+            raise ValueError(f"{run['integrator']} with step = {given['step']:g} s over t_end = {t_end:g} s takes "
+                             f"{evaluations:.3g} evaluations, above max_evaluations = {bound:g} (one run's budget; "
+                             f"the option max_evaluations confirms a larger run): use a larger step or a shorter t_end")
 
 
 def _check_exudyn_options(options: dict, t_end: float) -> None:
@@ -310,8 +317,14 @@ def _check_exudyn_options(options: dict, t_end: float) -> None:
     given = {k: p.default for k, p in declared.items() if p.default is not p.empty} | options
     arguments.number("h", given.get("h"))
     arguments.flag("ignore_singular", given["ignore_singular"])
-    check_arguments(t_end, given["h"], given["solver"], given["output_step"], given["friction"], given["eps"],
-                    given["configuration"], given["linear_solver"], given["ignore_singular"], given["newton_tolerance"])
+    grid = check_arguments(t_end, given["h"], given["solver"], given["output_step"], given["friction"], given["eps"],
+                           given["configuration"], given["linear_solver"], given["ignore_singular"],
+                           given["newton_tolerance"])
+    if grid.n_steps > tolerance("max_exudyn_steps"):
+        raise ValueError(f"t_end = {t_end:g} s at h = {given['h']:g} s takes {grid.n_steps:.3g} steps, above "
+                         f"max_exudyn_steps = {tolerance('max_exudyn_steps'):g} (one Exudyn run's budget, as an in-house "
+                         f"run's max_evaluations: each step solves Newton's equations at least once): use a larger h "
+                         f"or a shorter t_end")
 
 
 def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case]:
