@@ -65,8 +65,8 @@ class Settings:
         if self.levels > top:
             raise ValueError(f"validate: levels = {self.levels} is above validate_max_levels = {top} "
                              f"(reference/tolerances.toml): {2 * self.levels} Exudyn runs with steps halving from "
-                             f"{self.h:g} s to {math.ldexp(self.h, 1 - self.levels):.3g} s, whose second-order errors would fall below "
-                             f"what an observed order can measure; use at most {top} levels")
+                             f"{self.h:g} s to {math.ldexp(self.h, 1 - self.levels):.3g} s, whose second-order "
+                             f"errors would fall below what an observed order can measure; use at most {top} levels")
         finest, smallest = self.steps[-1], tolerance("validate_min_step")
         if finest < smallest:
             raise ValueError(f"validate: the finest Exudyn step h/2^(levels-1) = {self.h:g}/2^{self.levels - 1} = "
@@ -215,9 +215,8 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs
     (``runs/``, ``tables/``, ``figures/``, emptied first, so nothing of an earlier validation is read back).
     A failed run is a row of the tables with its error; the reference run must succeed."""
-    from study.validation_report import order_lines, write_report
-
     from study.validation_plan import check_plan
+    from study.validation_report import order_lines, write_report
 
     estimate = check_plan(mech, settings, _in_house_plan(mech, settings), len(EXUDYN_SOLVERS))
     out = Path(out)

@@ -18,7 +18,7 @@ equations. Every try states the outcome a demanding user expects:
 
 A try of the group "work bounds" that expects a stopped run (a RunBoundError, or exit 1 on the command line) is
 judged by what stopped it, never by the seconds it took (a host twice as slow takes twice as long): its message must
-give the count at which it stopped ("after N evaluations", "N evaluations reached", "N steps in a row"), and an
+give the count at which it stopped ("after N evaluations", "N evaluations reached", "after N steps"), and an
 evaluation count must not exceed the run's max_evaluations (its own, or the default of reference/tolerances.toml).
 A run that goes on past its bound is bad; one that does not say what stopped it is weak.
 
@@ -599,7 +599,7 @@ def _files(root: Path) -> dict[str, tuple]:
             (("cache", "codegen"), ("cache", "numba"))}
 
 
-STOP_COUNT = re.compile(r"after (\d+) evaluations|(\d+) evaluations reached|(\d+) steps in a row")
+STOP_COUNT = re.compile(r"after (\d+) evaluations|(\d+) evaluations reached|after (\d+) steps|(\d+) steps in a row")
 STOP_BOUND = re.compile(r"max_evaluations = ([0-9.e+]+)")
 
 
@@ -718,6 +718,7 @@ def _raises(message):
     ("x: stopped at t = 1 s after 150000 evaluations: ... above max_evaluations = 5e+06", "good"),
     ("x: 200 evaluations reached max_evaluations = 200 at t = 1 s", "good"),
     ("RK45 stopped at t = 1 s: 50 steps in a row below min_step = 1e-12 s", "good"),
+    ("Radau stopped at t = 4.4 s after 3021 steps: Required step size is less than spacing", "good"),
     ("x: stopped at t = 1 s after 6000000 evaluations: ... above max_evaluations = 5e+06", "bad"),
     ("x: stopped after 300 evaluations, above max_evaluations = 200", "bad"),
     ("x: stopped at t = 1 s: the run is too slow", "weak")])
