@@ -105,6 +105,7 @@ def method_options(items: list[str] | None, method: str) -> dict:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from study.progress import ProgressPrinter
     from study.simulate import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments, default_friction, resolve, \
         simulate
 
@@ -233,25 +234,6 @@ def _writable(path: Path, argument: str, folder: bool = False) -> None:
             pass
     except OSError as exc:
         raise ValueError(f"{argument} {path}: cannot write in {existing} ({exc.strerror or exc})") from None
-
-
-class ProgressPrinter:
-    """``progress=`` for long CLI runs: a line on stderr every few seconds once a run has taken a few seconds."""
-
-    def __init__(self, t_end: float, stream=None):
-        from study.reference_data import tolerance
-
-        self.t_end, self.stream = t_end, stream or sys.stderr
-        self.start = time.perf_counter()
-        self.after, self.interval = tolerance("cli_progress_after"), tolerance("cli_progress_interval")
-        self.next = self.start + self.after
-
-    def __call__(self, t: float) -> None:
-        now = time.perf_counter()
-        if now >= self.next:
-            self.next = now + self.interval
-            print(f"t = {t:.6g} of {self.t_end:g} s ({100 * t / self.t_end:.1f} %), {now - self.start:.0f} s",
-                  file=self.stream, flush=True)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -397,9 +379,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", default=defaults["backend"], choices=list(BACKENDS),
                    help=f"reference: Python + scipy; compiled: numba, described mechanisms (default {defaults['backend']})")
     p.add_argument("--friction", default=None, choices=[*FRICTION_TREATMENTS, "none"],
-                   help="Coulomb friction at the sliding contacts and pins (default: the parameter set's treatment "
-                        "of every entry with friction: its friction_treatment if it states one, else exact stick/slip; "
-                        "none where no entry has friction)")
+                   help="Coulomb friction at the sliding contacts and pins (default: the parameter set's "
+                        "friction_treatment, else exact stick/slip, for every entry with friction; none without any)")
     p.add_argument("--friction-eps", type=float, default=None, metavar="EPS",
                    help=f"regularization width [m/s] of 'regularized', stick band of 'sign' (default {DEFAULT_EPS:g})")
     p.add_argument("--friction-sgn", default=None, choices=[k for k in SIGN_FUNCTIONS if k != "sign"],

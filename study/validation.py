@@ -18,6 +18,7 @@ slider or pin has friction the comparison with Exudyn is at the regularized law 
 
 from __future__ import annotations
 
+import math
 import shutil
 import time
 from dataclasses import dataclass
@@ -55,8 +56,23 @@ class Settings:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
                 raise ValueError(f"validate: {name} = {value!r} must be a finite number > 0")
+        if isinstance(self.levels, bool) or not isinstance(self.levels, (int, np.integer)):
+            raise ValueError(f"validate: levels = {self.levels!r} must be a whole number (of Exudyn steps, "
+                             f"halving from h)")
         if self.levels < 2:
             raise ValueError(f"validate: levels = {self.levels!r}: an observed order needs at least 2 steps")
+        top = int(tolerance("validate_max_levels"))
+        if self.levels > top:
+            raise ValueError(f"validate: levels = {self.levels} is above validate_max_levels = {top} "
+                             f"(reference/tolerances.toml): {2 * self.levels} Exudyn runs with steps halving from "
+                             f"{self.h:g} s to {math.ldexp(self.h, 1 - self.levels):.3g} s, whose second-order "
+                             f"errors would fall below what an observed order can measure; use at most {top} levels")
+        finest, smallest = self.steps[-1], tolerance("validate_min_step")
+        if finest < smallest:
+            raise ValueError(f"validate: the finest Exudyn step h/2^(levels-1) = {self.h:g}/2^{self.levels - 1} = "
+                             f"{finest:.3g} s is below validate_min_step = {smallest:g} s (reference/tolerances.toml: "
+                             f"below it Newton's tolerance, not the step, decides Exudyn's error, so an observed order "
+                             f"no longer measures the method): use a larger h (--h) or fewer levels (--levels)")
         for label, num, den in (("t_end", self.t_end, self.output_step),
                                 ("output_step", self.output_step, self.h / 2 ** (self.levels - 1))):
             ratio = num / den
@@ -75,9 +91,9 @@ def _friction(mech: Mechanism) -> bool:
     return bool(eom.contacts or eom.pin_frictions)
 
 
-def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[str, str]]:
-    """The reference, every method at everyday settings, and (with friction) every treatment; a run that stops with
-    a simulation error (other than the reference, which everything is compared with) is recorded with it."""
+def _in_house_plan(mech: Mechanism, s: Settings) -> dict[str, dict]:
+    """The in-house runs by name with their options: the reference, every method at everyday settings, and (with
+    friction) every treatment."""
     law = {"friction": "regularized", "friction_eps": s.friction_eps} if _friction(mech) else {}
     reference = {"integrator": "DOP853", "rtol": tolerance("reference_rtol"), "atol": tolerance("reference_atol")}
     plan = {"reference": {**reference, "method": "projection", **law}}
@@ -86,13 +102,22 @@ def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> 
         plan["friction exact"] = {**EVERYDAY, "method": "projection", "friction": "exact"}
         plan["friction sign (RK4)"] = {"integrator": "RK4", "step": s.h / 2 ** (s.levels - 1), "method": "projection",
                                        "friction": "sign", "friction_eps": s.friction_eps}
+    return plan
+
+
+def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[str, str]]:
+    """The runs of :func:`_in_house_plan`, each with progress lines when long; a run that stops with a simulation
+    error (other than the reference, which everything is compared with) is recorded with it."""
+    from study.progress import ProgressPrinter
     from study.simulate import simulate
 
+    plan = _in_house_plan(mech, s)
     runs, failed = {}, {}
     for k, (name, options) in enumerate(plan.items(), 1):
         say(f"[{k}/{len(plan)}] in-house {name}")
         try:
-            runs[name] = simulate(mech, t_end=s.t_end, output_step=s.output_step, **options)
+            runs[name] = simulate(mech, t_end=s.t_end, output_step=s.output_step, **options,
+                                  progress=ProgressPrinter(s.t_end, say, label="    "))
         except (SimulationError, PainleveError) as exc:
             if name == "reference":
                 raise
@@ -108,7 +133,7 @@ def _exudyn_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tu
     runs, failed = {}, {}
     plan = [(solver, h) for solver in EXUDYN_SOLVERS for h in s.steps]
     for k, (solver, h) in enumerate(plan, 1):
-        say(f"[{k}/{len(plan)}] Exudyn {solver} h = {h:g} s")
+        say(f"[{k}/{len(plan)}] Exudyn {solver} h = {h:g} s ({round(s.t_end / h)} steps)")
         try:
             runs[(solver, h)] = run(mech, s.t_end, h, solver=solver, output_step=s.output_step, friction=friction,
                                     eps=s.friction_eps, configuration="tuned")
@@ -190,8 +215,10 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs
     (``runs/``, ``tables/``, ``figures/``, emptied first, so nothing of an earlier validation is read back).
     A failed run is a row of the tables with its error; the reference run must succeed."""
-    from study.validation_report import write_report
+    from study.validation_plan import check_plan
+    from study.validation_report import order_lines, write_report
 
+    estimate = check_plan(mech, settings, _in_house_plan(mech, settings), len(EXUDYN_SOLVERS))
     out = Path(out)
     for folder in ("runs", "tables", "figures"):
         shutil.rmtree(out / folder, ignore_errors=True)
@@ -199,6 +226,7 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     t0 = time.perf_counter()
     say(f"validate {mech.name}: {mech.equations().n_coordinates} coordinates, "
         f"{mech.equations().n_constraints} constraint rows, t_end = {settings.t_end:g} s")
+    say(estimate)
     inhouse, inhouse_failed = _in_house_runs(mech, settings, say)
     exudyn, failed = _exudyn_runs(mech, settings, say)
     for name, r in inhouse.items():
@@ -210,5 +238,7 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     for name, table in result.items():
         table.to_csv(out / "tables" / f"{name}.csv", index=False)
     path = write_report(mech, settings, out)
+    for line in order_lines(result["exudyn_orders"], mech.equations(), settings.friction_eps):
+        say(line)
     say(f"wrote {path} ({time.perf_counter() - t0:.0f} s)")
     return result

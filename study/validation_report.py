@@ -90,6 +90,35 @@ def _table(df: pd.DataFrame) -> str:
     return frame_table(df.map(lambda v: fmt_number(v) if isinstance(v, (float, np.floating)) else str(v)), df)
 
 
+def _width_unit(eom) -> str:
+    """The unit of the regularized friction's width for the mechanism's friction entries ('' without friction)."""
+    units = [*(["m/s"] if eom.contacts else []), *(["rad/s"] if getattr(eom, "pin_frictions", ()) else [])]
+    return " or ".join(units)
+
+
+def order_lines(orders: pd.DataFrame, eom, friction_eps: float) -> list[str]:
+    """One line per solver and quantity: its observed orders and the verdict, with the likely cause of an order
+    below ``min_order``: with regularized friction, the law's width unresolved by the steps near sticking."""
+    min_order = tolerance("min_order", table="cross_validation")
+    unit = _width_unit(eom)
+    lines = []
+    for _, r in orders.iterrows():
+        if not r["above_error_floor"]:
+            verdict = ("not judged: the smallest error is below the floor where the reference's and Newton's own "
+                       "errors enter (`reference/cross_validation.toml` order_error_floor)")
+        elif r["meets_min_order"]:
+            verdict = f"second order, as both solvers are (every order ≥ {min_order:g})"
+        elif unit:
+            verdict = (f"**below {min_order:g}**: probably the regularized friction's width (friction_eps = "
+                       f"{friction_eps:g} {unit}) is not resolved by Exudyn's steps near sticking: the law turns from "
+                       f"-mu N to +mu N over |v| < friction_eps, which a step of h crosses at once. Remedy: a larger "
+                       f"friction_eps (--friction-eps), or finer steps (a smaller --h, or more --levels)")
+        else:
+            verdict = f"**below {min_order:g}**: a finding (an unresolved load ramp, a switch, or a mapping error)"
+        lines.append(f"- {r['solver']}, {r['quantity']}: observed orders {r['orders']}; {verdict}.")
+    return lines
+
+
 def write_report(mech: Mechanism, settings, out: Path) -> Path:
     """``out/report.md`` from ``out/tables`` and the figures drawn from ``out/runs``."""
     t = {name: pd.read_csv(out / "tables" / f"{name}.csv", keep_default_na=False, na_values=[""])
@@ -113,20 +142,9 @@ def write_report(mech: Mechanism, settings, out: Path) -> Path:
     lines += ["## Exudyn", "",
               "Exudyn's model is generated from the same description (`study.exudyn_models`), not from the in-house "
               "equations, and starts from the same consistent state." + (
-                  f" Friction is the regularized law on both sides (width {settings.friction_eps:g} m/s)."
-                  if len(eom.contacts) else ""), "", _table(t["exudyn_convergence"]), ""]
-    orders = t["exudyn_orders"]
-    min_order = tolerance("min_order", table="cross_validation")
-    for _, r in orders.iterrows():
-        if not r["above_error_floor"]:
-            verdict = ("not judged: the smallest error is below the floor where the reference's and Newton's own "
-                       "errors enter (`reference/cross_validation.toml` order_error_floor)")
-        elif r["meets_min_order"]:
-            verdict = f"second order, as both solvers are (every order ≥ {min_order:g})"
-        else:
-            verdict = f"**below {min_order:g}**: a finding (an unresolved load ramp, a switch, or a mapping error)"
-        lines.append(f"- {r['solver']}, {r['quantity']}: observed orders {r['orders']}; {verdict}.")
-    lines += [""]
+                  f" Friction is the regularized law on both sides (width {settings.friction_eps:g} "
+                  f"{_width_unit(eom)})." if _width_unit(eom) else ""), "", _table(t["exudyn_convergence"]), ""]
+    lines += order_lines(t["exudyn_orders"], eom, settings.friction_eps) + [""]
     if len(t["reactions"]):
         lines += ["## Joint reactions", "", "In-house (reference run, absolute-coordinate multipliers) against "
                   "Exudyn's joint forces (finest index-3 run):", "", _table(t["reactions"]), ""]

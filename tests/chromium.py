@@ -24,7 +24,9 @@ CANDIDATES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-st
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-extensions",
          "--disable-default-apps", "--mute-audio", "--hide-scrollbars", "--remote-debugging-pipe")
-TIMEOUT = 60.0  # [s] for one command (loading a 2 MB page with MathML takes ~1 s)
+# [s] for one command: a hang guard, not a judgement of the host (loading a 2 MB page with MathML takes ~1 s; a
+# browser that sends no reply for a minute is stuck, and the test would otherwise hang)
+TIMEOUT = 60.0
 
 
 def find_chromium() -> str | None:
@@ -77,7 +79,7 @@ class Chromium:
 
     def _receive(self, deadline: float) -> dict:
         while b"\0" not in self._buffer:
-            if time.monotonic() > deadline:
+            if time.monotonic() > deadline:  # hang guard: TIMEOUT, a browser that stopped replying
                 raise TimeoutError("no reply from Chromium")
             chunk = os.read(self._from_browser, 1 << 16)
             if not chunk:
@@ -92,7 +94,7 @@ class Chromium:
         if session:
             message["sessionId"] = session
         self._send(message)
-        deadline = time.monotonic() + TIMEOUT
+        deadline = time.monotonic() + TIMEOUT  # hang guard: see TIMEOUT
         while True:
             reply = self._receive(deadline)
             if reply.get("id") == self._next_id:
@@ -107,7 +109,7 @@ class Chromium:
 
     def wait_for(self, event: str) -> dict:
         """Wait for (and consume) the page's next ``event``."""
-        deadline = time.monotonic() + TIMEOUT
+        deadline = time.monotonic() + TIMEOUT  # hang guard: see TIMEOUT
         while True:
             for k, e in enumerate(self._events):
                 if e.get("method") == event and e.get("sessionId") == self._session:
@@ -147,7 +149,7 @@ class Chromium:
         except (OSError, RuntimeError, TimeoutError):
             pass
         try:
-            self._proc.wait(timeout=10)
+            self._proc.wait(timeout=10)  # hang guard: a browser that does not close is killed
         except subprocess.TimeoutExpired:
             self._proc.kill()
             self._proc.wait()

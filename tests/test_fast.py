@@ -265,5 +265,5 @@ def test_what_the_compiled_backend_cannot_do_is_refused_before_it_compiles():
             "except ValueError as exc:\n"
             "    print(exc)\n"
             "print('study.fast.frontend' in sys.modules)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120).stdout
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout
     assert "does not support acceleration_solver='augmented_lagrangian'" in out and out.split()[-1] == "False"

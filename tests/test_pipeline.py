@@ -225,17 +225,16 @@ def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     runs = tmp_path / "cache" / "runs"
-    deadline = time.monotonic() + 120
-    while not list(runs.glob("*.json")) and time.monotonic() < deadline and proc.poll() is None:
+    while not list(runs.glob("*.json")) and proc.poll() is None:   # until the first result, or the run's end
         time.sleep(0.01)
     proc.send_signal(signal.SIGINT)
-    proc.communicate(timeout=60)
+    proc.communicate(timeout=600)  # hang guard: SIGINT ends the run within a second; one ignoring it would hang
     saved = sorted(runs.glob("*.json"))
     assert 1 <= len(saved) < 7, f"interruption came too late to test resuming ({len(saved)} saved)"
     assert not list(runs.glob("*.tmp")), "a temporary file was left behind"
     for path in saved:  # every saved result is complete
         SimulationResult.load(path)
-    done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    done = subprocess.run(cmd, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert f"({len(saved)} cached)" in done.stderr and f"{7 - len(saved)}/{7 - len(saved)} done" in done.stderr
     assert len(list(runs.glob("*.json"))) == 7

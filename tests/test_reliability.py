@@ -12,7 +12,8 @@ from scipy.integrate import RK45
 
 import handwritten
 from study import pipeline as pl
-from study.cli import ProgressPrinter, main
+from study.cli import main
+from study.progress import ProgressPrinter
 from study.reference_data import tolerance
 from study.simulate import check_run_size, simulate
 from study.solver.checks import SingularityMonitor, singularity_measure
@@ -69,15 +70,19 @@ def test_confirmed_large_run_is_not_refused():
     check_run_size(eom, q0, qd0, 1e3, "RK4", 1e-6, 10.0, None, evaluations, 1e9)  # confirmed: accepted
 
 
-def test_progress_printer_prints_when_due(capsys):
-    p = ProgressPrinter(2.0)
-    p(0.5)
-    assert capsys.readouterr().err == ""  # before cli_progress_after
-    p.next = 0.0
-    p(1.0)
-    assert "t = 1 of 2 s (50.0 %)" in capsys.readouterr().err
-    p(1.5)
-    assert capsys.readouterr().err == ""  # within cli_progress_interval
+def test_progress_printer_prints_every_progress_steps_steps():
+    """A line at every progress_steps-th step (a count: the same lines on any host), none before; each with the
+    steps still to t_end at the pace of the last interval."""
+    lines = []
+    every = int(tolerance("progress_steps"))
+    p = ProgressPrinter(2.0, say=lines.append)
+    for k in range(1, 2 * every + 1):
+        p(k * 0.5 / every)   # 0.5 s of the 2 s per interval
+        if k < every:
+            assert lines == []
+    assert len(lines) == 2, lines
+    assert lines[0].startswith(f"t = 0.5 of 2 s (25.0 %), {every} steps; ~{3 * every:.3g} steps to t_end")
+    assert lines[1].startswith(f"t = 1 of 2 s (50.0 %), {2 * every} steps; ~{2 * every:.3g} steps to t_end")
 
 
 def test_custom_case_folder_keeps_its_own_record(tmp_path, monkeypatch):
@@ -115,19 +120,23 @@ def test_command_line_failure_is_one_line_in_a_real_process(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_unreachable_scheduler_fails_before_dask_would_time_out():
-    """A refused --scheduler address fails at the TCP probe, not after Dask's connect timeout (set here to
-    120 s, so a run that waited for it would fail the bound below; the probe's own bound is
-    scheduler_probe_timeout in reference/tolerances.toml)."""
-    import time
-
-    import dask
+def test_unreachable_scheduler_fails_at_the_probe_before_dask_is_asked(monkeypatch):
+    """A refused --scheduler address fails at the TCP probe (bounded by scheduler_probe_timeout in
+    reference/tolerances.toml), not after Dask's connect timeout: no Dask client is ever made (a count, zero, not
+    the seconds it took)."""
+    import distributed
 
     from study.pipeline import make_executor
 
-    t0 = time.monotonic()
-    with dask.config.set({"distributed.comm.timeouts.connect": "120s"}):
-        with pytest.raises(OSError, match="'tcp://127.0.0.1:9' cannot be reached"):
-            with make_executor(scheduler="tcp://127.0.0.1:9"):
-                pass
-    assert time.monotonic() - t0 < 60.0  # half of Dask's timeout: the probe, not Dask, reported it
+    clients = []
+
+    class Client:   # Dask's client, counted: the probe must refuse the address before one is made
+        def __init__(self, *args, **kwargs):
+            clients.append(args)
+            raise AssertionError("a Dask client was made for an address the probe should have refused")
+
+    monkeypatch.setattr(distributed, "Client", Client)
+    with pytest.raises(OSError, match="'tcp://127.0.0.1:9' cannot be reached"):
+        with make_executor(scheduler="tcp://127.0.0.1:9"):
+            pass
+    assert clients == []

@@ -11,10 +11,16 @@ equations. Every try states the outcome a demanding user expects:
 :func:`judge` grades a try:
 
 - **bad**: no error where one is due, an undocumented exception (a raw TypeError, KeyError ...), a
-  traceback, a try that outlives its time bound, or a file written by a refused input;
+  traceback, or a file written by a refused input;
 - **weak**: the documented kind of error, but its message misses a fragment (it does not say which value,
   from where, or why) or the exit code is the other documented one;
 - **good**: everything as stated.
+
+A try of the group "work bounds" that expects a stopped run (a RunBoundError, or exit 1 on the command line) is
+judged by what stopped it, never by the seconds it took (a host twice as slow takes twice as long): its message must
+give the count at which it stopped ("after N evaluations", "N evaluations reached", "after N steps"), and an
+evaluation count must not exceed the run's max_evaluations (its own, or the default of reference/tolerances.toml).
+A run that goes on past its bound is bad; one that does not say what stopped it is weak.
 
 ``python tests/test_reliability_probe.py`` prints the tally; the test requires every try to be good.
 """
@@ -27,7 +33,6 @@ import io
 import json
 import os
 import re
-import signal
 import sys
 import textwrap
 import traceback
@@ -47,11 +52,6 @@ from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, 
 from study.params import ParameterError, load_parameters  # noqa: E402
 from study.results import SimulationResult  # noqa: E402
 from study.simulate import simulate  # noqa: E402
-
-# A try that takes longer than this is bad: "cannot finish in reasonable time" has to be found out early.
-# (Wall seconds on a 2-core host; the slowest good try, a refused chattering run, stops within a few seconds.)
-TIME_BOUND_S = 90
-
 
 @dataclass
 class Try:
@@ -599,17 +599,35 @@ def _files(root: Path) -> dict[str, tuple]:
             (("cache", "codegen"), ("cache", "numba"))}
 
 
-class _Timeout(Exception):
-    pass
+STOP_COUNT = re.compile(r"after (\d+) evaluations|(\d+) evaluations reached|after (\d+) steps|(\d+) steps in a row")
+STOP_BOUND = re.compile(r"max_evaluations = ([0-9.e+]+)")
+
+
+def stopped_by_count(message: str) -> tuple[str, str] | None:
+    """None if a stopped run's message gives the count at which it stopped, within its evaluation bound; else the
+    verdict ('bad' past the bound, 'weak' without a count) and why."""
+    from study.reference_data import tolerance
+
+    found = STOP_COUNT.search(message)
+    if found is None:
+        return "weak", f"a stopped run that does not give the count that stopped it: {' '.join(message.split())[:300]}"
+    bound = STOP_BOUND.search(message)
+    limit = float(bound.group(1).rstrip(".")) if bound else tolerance("max_evaluations")
+    used = found.group(1) or found.group(2)
+    if used is not None and int(used) > limit:
+        return "bad", f"stopped after {used} evaluations, past its bound max_evaluations = {limit:g}"
+    return None
+
+
+def _stop_expected(t: Try) -> bool:
+    """A try of the work bounds that expects a run stopped on its way (not refused before it starts)."""
+    if t.group != "work bounds":
+        return False
+    return t.expect == 1 if isinstance(t.expect, int) else issubclass(t.expect, RunBoundError)
 
 
 def judge(t: Try, tmp: Path) -> tuple[str, str]:
     """Run one try in ``tmp`` and grade it: ('good' | 'weak' | 'bad', what happened)."""
-    def alarm(signum, frame):
-        raise _Timeout()
-
-    old = signal.signal(signal.SIGALRM, alarm)
-    signal.alarm(TIME_BOUND_S)
     stderr = io.StringIO()
     before = None
     try:
@@ -625,19 +643,12 @@ def judge(t: Try, tmp: Path) -> tuple[str, str]:
                 try:
                     t.action(tmp)
                     code = None
-                except _Timeout:
-                    raise
                 except Exception as exc:  # noqa: BLE001 - graded below
                     caught = exc
                 else:
                     caught = None
-    except _Timeout:
-        return "bad", f"did not finish within {TIME_BOUND_S} s"
     except Exception as exc:  # noqa: BLE001 - an exception out of main() is a traceback for the user
         return "bad", f"raw {type(exc).__name__}: {exc}".splitlines()[0][:300]
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
     if isinstance(t.expect, int):   # progress lines of a long run may come first; the error is one line
         lines = stderr.getvalue().strip().splitlines()
         message = "\n".join(lines[next((i for i, line in enumerate(lines) if line.startswith("error:")), 0):])
@@ -647,6 +658,8 @@ def judge(t: Try, tmp: Path) -> tuple[str, str]:
             return "bad", "traceback on stderr"
         if before is not None and not t.writes and _files(tmp) != before:
             return "bad", f"exit {code} but files were written: {sorted(set(_files(tmp)) - set(before))}"
+        if code == t.expect and _stop_expected(t) and stopped_by_count(message):
+            return stopped_by_count(message)
         missing = [f for f in t.fragments if f not in message]
         if code != t.expect or missing or len(message.splitlines()) != 1:
             return "weak", f"exit {code}, missing {missing}: {message[:300]}"
@@ -656,6 +669,8 @@ def judge(t: Try, tmp: Path) -> tuple[str, str]:
     if not isinstance(caught, t.expect):
         return "bad", f"{type(caught).__name__}: {caught}".splitlines()[0][:300]
     message = str(caught)
+    if _stop_expected(t) and stopped_by_count(message):
+        return stopped_by_count(message)
     missing = [f for f in t.fragments if f not in message]
     if missing:
         return "weak", f"missing {missing}: {' '.join(message.split())[:300]}"
@@ -691,6 +706,27 @@ def test_the_probe_has_at_least_120_tries_with_unique_names():
     names = [(t.group, t.name) for t in TRIES]
     assert len(names) >= 120
     assert len(set(names)) == len(names)
+
+
+def _raises(message):
+    def action(tmp):
+        raise RunBoundError(message)
+    return action
+
+
+@pytest.mark.parametrize("message, verdict", [
+    ("x: stopped at t = 1 s after 150000 evaluations: ... above max_evaluations = 5e+06", "good"),
+    ("x: 200 evaluations reached max_evaluations = 200 at t = 1 s", "good"),
+    ("RK45 stopped at t = 1 s: 50 steps in a row below min_step = 1e-12 s", "good"),
+    ("Radau stopped at t = 4.4 s after 3021 steps: Required step size is less than spacing", "good"),
+    ("x: stopped at t = 1 s after 6000000 evaluations: ... above max_evaluations = 5e+06", "bad"),
+    ("x: stopped after 300 evaluations, above max_evaluations = 200", "bad"),
+    ("x: stopped at t = 1 s: the run is too slow", "weak")])
+def test_a_stopped_run_is_judged_by_its_counts_not_its_seconds(message, verdict, tmp_path):
+    """The judge grades a run bound by the count that stopped it: past the bound is bad, no count is weak."""
+    attempt = Try("stop", W, _raises(message), RunBoundError, ())
+    assert judge(attempt, tmp_path)[0] == verdict
+    assert judge(dataclasses.replace(attempt, group="flags and options"), tmp_path)[0] == "good"
 
 
 @pytest.mark.parametrize("attempt", [pytest.param(t, marks=pytest.mark.slow) if t.slow else t for t in TRIES],

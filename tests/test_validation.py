@@ -93,3 +93,53 @@ def test_pin_friction_goes_through_every_treatment_and_exudyn(tmp_path):
     assert reference.meta["friction"] == "regularized" and reference.energies["work_friction_pin"][-1] < 0
     assert (tables["exudyn_convergence"]["error"] == "").all()
     assert (tables["exudyn_orders"]["min_order"] >= tolerance("min_order", table="cross_validation")).all()
+
+
+CART = Path(__file__).resolve().parents[1] / "examples" / "cart_pendulum" / "cart_pendulum.py"
+
+
+def _cart(tmp_path, **settings):
+    lines = []
+    tables = study.validate(study.load_mechanism(CART), study.ValidationSettings(t_end=0.5, levels=2, **settings),
+                            tmp_path, say=lines.append)
+    return tables["exudyn_orders"].set_index(["solver", "quantity"]), [line for line in lines if "observed" in line]
+
+
+def test_an_order_below_its_bound_with_regularized_friction_names_the_width_and_the_remedy(tmp_path):
+    """The cart with rail friction at the default width (1e-3 m/s): Exudyn's velocity orders fall below min_order
+    (measured 1.32 and 1.32 at h = 2e-3, 1e-3 s over 0.5 s) while the positions keep order 2, and the summary names
+    the likely cause, the width unresolved near sticking, with the remedy, instead of a generic finding."""
+    orders, lines = _cart(tmp_path)
+    min_order = tolerance("min_order", table="cross_validation")
+    assert (orders.loc[(slice(None), "qd"), "min_order"] < min_order).all(), orders
+    assert (orders.loc[(slice(None), "q"), "min_order"] >= min_order).all(), orders
+    below = [line for line in lines if "below" in line]
+    assert len(below) == 2 and all(", qd:" in line for line in below), lines
+    for line in below:
+        assert "friction_eps = 0.001 m/s" in line and "not resolved" in line and "near sticking" in line
+        assert "a larger friction_eps (--friction-eps)" in line and "a smaller --h" in line
+        assert "a finding" not in line
+    assert (tmp_path / "report.md").read_text().count("Remedy: a larger friction_eps") == 2
+
+
+@pytest.mark.slow
+def test_the_remedy_named_for_an_unresolved_width_restores_second_order(tmp_path):
+    """The remedy the summary names works: at friction_eps = 0.05 m/s the same steps resolve the law, and every
+    observed order is second order again (measured 2.000 for q and qd on both solvers)."""
+    orders, lines = _cart(tmp_path, friction_eps=0.05)
+    assert (orders["min_order"] >= tolerance("min_order", table="cross_validation")).all(), orders
+    assert not any("below" in line for line in lines), lines
+
+
+def test_an_order_below_its_bound_without_friction_stays_a_finding():
+    """Without friction the width is no cause: the generic finding, with no friction remedy."""
+    from study.validation_report import order_lines
+
+    orders = pd.DataFrame([{"solver": "index3", "quantity": "qd", "orders": "1.2", "above_error_floor": True,
+                            "meets_min_order": False}])
+    yoke = study.load_mechanism(YOKE).equations()
+    (line,) = order_lines(orders, yoke, 1e-3)
+    assert "a finding" in line and "friction_eps" not in line
+    cart = study.load_mechanism(CART).equations()
+    (line,) = order_lines(orders, cart, 1e-3)
+    assert "friction_eps = 0.001 m/s" in line and "a finding" not in line

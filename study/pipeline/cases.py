@@ -57,6 +57,7 @@ from typing import Any, Iterable, Mapping
 from study import arguments
 from study.locations import CASES_DIR
 from study.mechanisms import is_user_file, named_mechanism
+from study.pipeline.engine_options import check_exudyn_options, check_inhouse_options
 from study.pipeline.keys import code_version, mechanism_hash
 from study.reference_data import tolerance
 
@@ -263,54 +264,11 @@ def _check_case(case: Case, where: str) -> None:
     try:
         arguments.number("repeat", options.pop("repeat", 1), whole=True)
         if case.engine == "exudyn":
-            _check_exudyn_options(options, case.t_end)
+            check_exudyn_options(options, case.t_end)
         else:
-            _check_inhouse_options(options, case.t_end)
+            check_inhouse_options(options, case.t_end)
     except ValueError as exc:
         raise CaseListError(f"{where}: {exc}") from None
-
-
-def _check_inhouse_options(options: dict, t_end: float) -> None:
-    import inspect
-
-    from study.simulate import check_arguments, simulate
-    from study.solver.stabilization import make_stabilization
-
-    arguments.choice("initial", options.pop("initial", "consistent"), ("consistent", "printed"))
-    arguments.number("perturb_ulps", options.pop("perturb_ulps", 0), positive=False, whole=True)
-    for key in ("q0", "qd0"):   # a user's state: its length is checked against the equations when the case runs
-        if key in options:
-            value = options.pop(key)
-            if not isinstance(value, list):
-                raise ValueError(f"{key} = {arguments.shown(value)} must be a list of numbers")
-            arguments.state(key, value, len(value))
-    run = {k: p.default for k, p in inspect.signature(simulate).parameters.items() if p.kind == p.KEYWORD_ONLY}
-    checked = set(inspect.signature(check_arguments).parameters) - {"names"}
-    given = {k: options.pop(k) for k in list(options) if k in run}
-    run.update(given, t_end=t_end)
-    given = check_arguments(**{k: v for k, v in run.items() if k in checked})
-    make_stabilization(run["method"], **options)
-    samples = given["t_end"] / given["output_step"]   # the time column alone: a lower bound of the output
-    if samples * tolerance("output_bytes_per_value") > tolerance("max_output_bytes"):
-        raise ValueError(f"t_end = {t_end:g} s at output_step = {given['output_step']:g} s asks for {samples:.3g} "
-                         f"samples, more output than max_output_bytes = {tolerance('max_output_bytes'):g} bytes allows")
-
-
-def _check_exudyn_options(options: dict, t_end: float) -> None:
-    import inspect
-
-    from study.exudyn_models import run
-    from study.exudyn_models.settings import check_arguments
-
-    declared = dict(list(inspect.signature(run).parameters.items())[2:])   # after ps and t_end
-    unknown = sorted(set(options) - set(declared))
-    if unknown:
-        raise ValueError(f"{', '.join(unknown)}: not an option of an Exudyn case; valid options: {', '.join(declared)}")
-    given = {k: p.default for k, p in declared.items() if p.default is not p.empty} | options
-    arguments.number("h", given.get("h"))
-    arguments.flag("ignore_singular", given["ignore_singular"])
-    check_arguments(t_end, given["h"], given["solver"], given["output_step"], given["friction"], given["eps"],
-                    given["configuration"], given["linear_solver"], given["ignore_singular"], given["newton_tolerance"])
 
 
 def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case]:

@@ -40,7 +40,8 @@ class Budget:
             span, advanced = nfev - n0, self.t_reached - t0
             estimate = nfev + (self.t_end - self.t_reached) * span / max(advanced, 1e-300)
             raise RunBoundError(
-                f"{name}: stopped at t = {self.t_reached:.9g} s: the last {span} evaluations advanced t by "
+                f"{name}: stopped at t = {self.t_reached:.9g} s after {nfev} evaluations: the last {span} advanced t by "
                 f"{advanced:.3g} s; at that pace reaching t_end = {self.t_end:g} s would take an estimated "
                 f"{estimate:.3g} evaluations, above max_evaluations = {self.max_evaluations:g} (a chattering or far "
-                f"too stiff run; max_evaluations= raises the bound)" + note, t=self.t_reached, quantity="evaluations")
+                f"too stiff run; max_evaluations= raises the bound)" + note, t=self.t_reached, quantity="evaluations",
+                evaluations=nfev, estimate=estimate)

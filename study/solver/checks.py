@@ -372,7 +372,7 @@ class RunGuard:
             raise RunBoundError(
                 f"{dyn.eom.name}: {dyn.nfev} evaluations reached max_evaluations = {self.max_evaluations:g} at "
                 f"t = {t:.9g} s (a stalled or far too long run; max_evaluations= raises the bound)"
-                + self._pose_note(y) + self._law_note(), t=float(t), quantity="evaluations")
+                + self._pose_note(y) + self._law_note(), t=float(t), quantity="evaluations", evaluations=dyn.nfev)
         if self.budget is not None:
             self.budget.update(dyn.nfev, t, dyn.eom.name, self._law_note())
         try:

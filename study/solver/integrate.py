@@ -242,8 +242,8 @@ def integrate(
 
     def stop(reason: str, t_now: float, y_now: Array, h: float) -> RunBoundError:
         extra = describe(t_now, y_now) if describe is not None else ""
-        return RunBoundError(f"{method} stopped at t = {t_now:.9g} s: {reason}" + (f"; {extra}" if extra else ""),
-                             t=float(t_now), quantity="step", step=h, steps=traj.steps)
+        return RunBoundError(f"{method} stopped at t = {t_now:.9g} s after {traj.steps} steps: {reason}"
+                             f"{'; ' + extra if extra else ''}", t=float(t_now), quantity="step", step=h, steps=traj.steps)
     options = {"rtol": rtol, "atol": atol} if method != "RK4" else {}
     if step is not None:
         options["first_step"] = step
