@@ -75,7 +75,7 @@ def test_no_module_finds_data_or_reports_by_its_own_file_path():
 
 
 def _run(argv: list[str], cwd: Path, env: dict) -> str:
-    done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+    done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
     assert done.returncode == 0, f"{argv[1:]} exit {done.returncode}:\n{done.stderr[-2000:]}"
     return done.stdout
 
