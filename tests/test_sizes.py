@@ -25,9 +25,6 @@ STUDY = Path(__file__).resolve().parents[1] / "study"
 
 #: "<path under study/>" (a module, its lines) or "<path under study/>::<qualified name>" (a function, its lines)
 KNOWN = {
-    "bench/command.py::run": 108,
-    "bench/sweeps.py::sweep": 95,
-    "bench/targets.py::evaluate_targets": 165,
     "cli.py": 461,
     "cli.py::build_parser": 113,
     "fast/dynamics.py::_friction": 103,
@@ -35,9 +32,6 @@ KNOWN = {
     "model/compile.py::compile_description": 84,
     "params.py::parse_parameters": 104,
     "pipeline/orchestrate.py::run_pipeline": 81,
-    "report/sections/benchmarks.py::section": 112,
-    "report/sections/beyond_papers.py::_n_four_bar": 133,
-    "report/sections/sensitivity.py::_reading": 123,
     "simulate.py::simulate": 210,
     "solver/integrate.py::integrate": 163,
 }

@@ -79,12 +79,8 @@ def main(argv=None) -> int:
 SECTIONS = ("accel", "qr20", "sweep", "scaling", "profile", "studies", "compile")
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run the benchmark with parsed options (see :func:`add_arguments`); returns the exit code.
-
-    ``--only`` runs some sections and reads the others' tables from the output folder (written by an
-    earlier full run in the same folder), so ``targets.csv`` is always evaluated from every table.
-    """
+def _selection(args: argparse.Namespace) -> tuple[set[str], list[str]]:
+    """The sections (``--only``) and mechanisms (``--mechanisms``) to run; ValueError naming an unknown one."""
     only = set(args.only or SECTIONS)
     unknown = only - set(SECTIONS)
     if unknown:
@@ -94,20 +90,11 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise ValueError(f"--mechanisms {', '.join(sorted(unknown))}: no such mechanism in the benchmark's case list; "
                          f"valid: {', '.join(CASES)}")
-    out = args.out
-    out.mkdir(parents=True, exist_ok=True)
-    if args.remeasure:
-        shutil.rmtree(bench_store().root, ignore_errors=True)
+    return only, mechs
 
-    def saved(name):
-        path = out / name
-        if not path.exists():
-            raise FileNotFoundError(f"{path} is missing: run the section that writes it (without --only) first")
-        return pd.read_csv(path)
 
-    def kept(name):   # the saved table whose other mechanisms' rows a --mechanisms run keeps
-        return saved(name) if args.mechanisms else None
-    t0 = time.perf_counter()
+def _machine_info(args: argparse.Namespace, only: set[str], mechs: list[str], out: Path) -> dict:
+    """The record of the machine and of this run's settings (``machine.json``), logged."""
     info = machine()
     info.update({"repeats": repeats(args.quick), "quick": args.quick, "long_run_s": LONG_RUN, "reference_rtol": REF_RTOL,
                  "reference_check_rtols": list(REF_CHECK_RTOLS), "exudyn_run_budget_s": EXUDYN_RUN_BUDGET,
@@ -115,10 +102,22 @@ def run(args: argparse.Namespace) -> int:
                  "sections_run": sorted(only), "mechanisms_run": mechs, "load_average_at_start": os.getloadavg()[0],
                  "saved_runs": str(bench_store().root), "remeasure": args.remeasure})
     log(f"machine: {info['platform']}, {info['cpu_count']} CPUs, load {os.getloadavg()}; output {out}")
+    return info
+
+
+def _warm_up() -> None:
+    """One short compiled run of each benchmark mechanism (loads or builds the code cache before any timing)."""
     log("warming up the compiled path (loads or builds the cache)")
     for mech, (variant, _, extra) in CASES.items():
         simulate(mech, variant=variant, t_end=0.05, backend="compiled", **extra)
     simulate("quick_return", variant="seed", t_end=0.05, backend="compiled")
+
+
+def _accuracy_sections(args: argparse.Namespace, only: set[str], mechs: list[str], out: Path, saved, kept):
+    """Sections accel, qr20 and sweep (run and written, or read back), and ``references.csv``.
+
+    Returns (accel, qr20, wp, ratio): the tables the later sections and the targets read.
+    """
     if "accel" in only:
         accel = _merge(accel_costs(repeats(args.quick), 2000 if args.quick else 20000, mechs),
                        kept("acceleration_evaluation.csv"), mechs)
@@ -150,6 +149,14 @@ def run(args: argparse.Namespace) -> int:
         rerun = (of_qr20 & ("qr20" in only)) | (~of_qr20 & old.mechanism.isin(mechs) & ("sweep" in only))
         new = ([sweep_refs] if "sweep" in only else []) + ([qr_refs] if "qr20" in only else [])
         write_csv(pd.concat([old[~rerun], *new], ignore_index=True), out / "references.csv")
+    return accel, qr20, wp, ratio
+
+
+def _scaling_sections(args: argparse.Namespace, only: set[str], out: Path, saved):
+    """Sections scaling and studies (run and written, or read back).
+
+    Returns (time_df, mem_df, study_cpu); study_cpu is None when the studies' table was neither made nor saved.
+    """
     if "scaling" in only:
         time_df, density_df, mem_df = scaling(args.quick)
         write_csv(time_df, out / "scaling_simulated_time.csv")
@@ -167,16 +174,19 @@ def run(args: argparse.Namespace) -> int:
         log(f"(h) studies: {len(study_cpu)} saved compiled/reference pairs")
     elif (out / "study_backend_cpu.csv").exists():
         study_cpu = saved("study_backend_cpu.csv")
-    if "profile" in only:
-        profile = overhead_profile(qr20, wp, accel, repeats(args.quick), mechs)
-        write_csv(_merge(profile, kept("overhead_profile.csv"), mechs), out / "overhead_profile.csv")
-    targets = evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp, study_cpu=study_cpu)
+    return time_df, mem_df, study_cpu
+
+
+def _write_targets(targets: pd.DataFrame, out: Path) -> None:
+    """``targets.csv``, and each target's verdict logged."""
     write_csv(targets, out / "targets.csv")
     for _, t in targets.iterrows():
         verdict = {True: "met", False: "MISSED"}.get(t.met, t.met)
         log(f"target {t.target}: measured {t.measured:.4g} {t.unit} vs {t.threshold:g}: {verdict}")
-    if "compile" in only and not (args.quick or args.skip_compile):
-        write_csv(compile_time(), out / "compile_time.csv")
+
+
+def _write_machine(info: dict, only: set[str], out: Path, t0: float) -> None:
+    """``machine.json`` with this run's wall time; a partial run adds its record to the full run's."""
     wall = info["benchmark_wall_s"] = time.perf_counter() - t0
     info["load_average_at_end"] = os.getloadavg()[0]
     path = out / "machine.json"
@@ -186,4 +196,38 @@ def run(args: argparse.Namespace) -> int:
         info = full
     atomic_write(path, json.dumps(info, indent=1, sort_keys=True))
     log(f"done in {wall:.0f} s; results in {out}")   # this run's time (info may now be the full run's record)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark with parsed options (see :func:`add_arguments`); returns the exit code.
+
+    ``--only`` runs some sections and reads the others' tables from the output folder (written by an
+    earlier full run in the same folder), so ``targets.csv`` is always evaluated from every table.
+    """
+    only, mechs = _selection(args)
+    out = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    if args.remeasure:
+        shutil.rmtree(bench_store().root, ignore_errors=True)
+
+    def saved(name):
+        path = out / name
+        if not path.exists():
+            raise FileNotFoundError(f"{path} is missing: run the section that writes it (without --only) first")
+        return pd.read_csv(path)
+
+    def kept(name):   # the saved table whose other mechanisms' rows a --mechanisms run keeps
+        return saved(name) if args.mechanisms else None
+    t0 = time.perf_counter()
+    info = _machine_info(args, only, mechs, out)
+    _warm_up()
+    accel, qr20, wp, ratio = _accuracy_sections(args, only, mechs, out, saved, kept)
+    time_df, mem_df, study_cpu = _scaling_sections(args, only, out, saved)
+    if "profile" in only:
+        profile = overhead_profile(qr20, wp, accel, repeats(args.quick), mechs)
+        write_csv(_merge(profile, kept("overhead_profile.csv"), mechs), out / "overhead_profile.csv")
+    _write_targets(evaluate_targets(accel, ratio, qr20, time_df, mem_df, wp=wp, study_cpu=study_cpu), out)
+    if "compile" in only and not (args.quick or args.skip_compile):
+        write_csv(compile_time(), out / "compile_time.csv")
+    _write_machine(info, only, out, t0)
     return 0

@@ -77,6 +77,68 @@ def order2_step(h: float, err: float, level: float, output_step: float, margin: 
     return output_step / math.ceil(output_step / predicted - 1e-9)
 
 
+def _order2_steps(run_one, rows: list[dict], mech: str, engine: str, method: str, candidates: list[Case],
+                  t_end: float, run_budget: float) -> None:
+    """Exudyn's step refined by its order-2 error decrease towards each of EXUDYN_LEVELS not reached yet."""
+    for level in EXUDYN_LEVELS:  # order-2 refinement of Exudyn's step towards the levels not reached
+        for _ in range(3):
+            done = [r for r in rows if r["engine"] == engine and r["method"] == method and np.isfinite(r["error"])]
+            if not done or min(r["error"] for r in done) <= level:
+                break
+            finest = min(done, key=lambda r: r["setting"])
+            h = order2_step(finest["setting"], finest["error"], level, OUTPUT_STEPS[mech])
+            predicted = finest["cpu_s"] * finest["setting"] / h
+            if predicted > run_budget:
+                log(f"(b) {mech} {engine} {method}: {level:g} needs h ~ {h:.3g} s, predicted {predicted:.0f} s > "
+                    f"budget {run_budget:g} s: not run")
+                break
+            log(f"(b) {mech} {engine} {method}: order-2 step for {level:g}: h = {h:.4g} s (predicted "
+                f"{predicted:.1f} s)")
+            case = at_setting(replace(candidates[0], t_end=t_end), h)
+            err, _ = run_one(engine, method, case, f"order-2 step for {level:g}")
+            if not np.isfinite(err):
+                break  # the solver fails at this step: recorded, no retry
+
+
+def _python_exudyn_runs(run_one, rows: list[dict], mech: str, t_end: float) -> None:
+    """Exudyn with Python user functions at the steps the tuned sweep chose for each level (and the finest)."""
+    # Exudyn with Python user functions solves the same discrete equations as the tuned configuration
+    # (tests/test_exudyn_tuned.py: equal to ~1e-10 rad), so its error at a step is the tuned one's: it is run
+    # at the steps the tuned sweep chose for each level (and the finest tried), not swept again.
+    done = pd.DataFrame(rows)
+    for method in ("index3", "index2"):
+        tuned = done[(done.engine == "Exudyn tuned") & (done.method == method) & done.error.notna()]
+        picks = {float(tuned.setting.min())} if len(tuned) else set()
+        for level in EXUDYN_LEVELS:
+            ok = tuned[tuned.error <= level]
+            if len(ok):
+                picks.add(float(ok.loc[ok.cpu_s.idxmin(), "setting"]))
+        for h in sorted(picks, reverse=True):
+            template = replace(group(f"{mech}: {PYTHON_EXUDYN}, {method}")[0], t_end=t_end)
+            run_one(PYTHON_EXUDYN, method, at_setting(template, h), "steps of the tuned sweep")
+
+
+def _median_timings(rows: list[dict], ran: list[Case], executed: list[Case], mech: str, quick: bool) -> None:
+    """The cheapest setting reaching each level timed repeatedly (median); its repeats appended to ``executed``."""
+    df = pd.DataFrame(rows)
+    # medians for the cheapest setting reaching each level
+    for level in LEVELS:
+        for (engine, method), g in df.groupby(["engine", "method"]):
+            ok = g[g.error <= level]
+            if ok.empty:
+                continue
+            i = ok.cpu_s.idxmin()
+            s = df.loc[i]
+            want = repeats_for(s.cpu_s, quick)
+            want = max(want, EXUDYN_REPEATS) if engine in EXUDYN_ENGINES else want
+            if df.at[i, "repeats"] >= want:
+                continue
+            df.at[i, "cpu_s"] = timed(ran[i], want)[0]   # the run's first timing and want - 1 more
+            df.at[i, "repeats"] = want
+            executed += [repeat_of(ran[i], k) for k in range(1, want)]
+            log(f"(b) {mech} {engine} {method} setting {s.setting:.4g}: median of {want}: {df.at[i, 'cpu_s']:.4f} s")
+
+
 def sweep(mech: str, quick: bool) -> list[Case]:
     """Work-precision runs of every engine/method on one mechanism (see the module docstring).
 
@@ -122,53 +184,7 @@ def sweep(mech: str, quick: bool) -> list[Case]:
                 break
         if engine not in EXUDYN_ENGINES:
             continue
-        for level in EXUDYN_LEVELS:  # order-2 refinement of Exudyn's step towards the levels not reached
-            for _ in range(3):
-                done = [r for r in rows if r["engine"] == engine and r["method"] == method and np.isfinite(r["error"])]
-                if not done or min(r["error"] for r in done) <= level:
-                    break
-                finest = min(done, key=lambda r: r["setting"])
-                h = order2_step(finest["setting"], finest["error"], level, OUTPUT_STEPS[mech])
-                predicted = finest["cpu_s"] * finest["setting"] / h
-                if predicted > run_budget:
-                    log(f"(b) {mech} {engine} {method}: {level:g} needs h ~ {h:.3g} s, predicted {predicted:.0f} s > "
-                        f"budget {run_budget:g} s: not run")
-                    break
-                log(f"(b) {mech} {engine} {method}: order-2 step for {level:g}: h = {h:.4g} s (predicted "
-                    f"{predicted:.1f} s)")
-                case = at_setting(replace(candidates[0], t_end=t_end), h)
-                err, _ = run_one(engine, method, case, f"order-2 step for {level:g}")
-                if not np.isfinite(err):
-                    break  # the solver fails at this step: recorded, no retry
-    # Exudyn with Python user functions solves the same discrete equations as the tuned configuration
-    # (tests/test_exudyn_tuned.py: equal to ~1e-10 rad), so its error at a step is the tuned one's: it is run
-    # at the steps the tuned sweep chose for each level (and the finest tried), not swept again.
-    done = pd.DataFrame(rows)
-    for method in ("index3", "index2"):
-        tuned = done[(done.engine == "Exudyn tuned") & (done.method == method) & done.error.notna()]
-        picks = {float(tuned.setting.min())} if len(tuned) else set()
-        for level in EXUDYN_LEVELS:
-            ok = tuned[tuned.error <= level]
-            if len(ok):
-                picks.add(float(ok.loc[ok.cpu_s.idxmin(), "setting"]))
-        for h in sorted(picks, reverse=True):
-            template = replace(group(f"{mech}: {PYTHON_EXUDYN}, {method}")[0], t_end=t_end)
-            run_one(PYTHON_EXUDYN, method, at_setting(template, h), "steps of the tuned sweep")
-    df = pd.DataFrame(rows)
-    # medians for the cheapest setting reaching each level
-    for level in LEVELS:
-        for (engine, method), g in df.groupby(["engine", "method"]):
-            ok = g[g.error <= level]
-            if ok.empty:
-                continue
-            i = ok.cpu_s.idxmin()
-            s = df.loc[i]
-            want = repeats_for(s.cpu_s, quick)
-            want = max(want, EXUDYN_REPEATS) if engine in EXUDYN_ENGINES else want
-            if df.at[i, "repeats"] >= want:
-                continue
-            df.at[i, "cpu_s"] = timed(ran[i], want)[0]   # the run's first timing and want - 1 more
-            df.at[i, "repeats"] = want
-            executed += [repeat_of(ran[i], k) for k in range(1, want)]
-            log(f"(b) {mech} {engine} {method} setting {s.setting:.4g}: median of {want}: {df.at[i, 'cpu_s']:.4f} s")
+        _order2_steps(run_one, rows, mech, engine, method, candidates, t_end, run_budget)
+    _python_exudyn_runs(run_one, rows, mech, t_end)
+    _median_timings(rows, ran, executed, mech, quick)
     return executed

@@ -155,28 +155,26 @@ def _machine_text(info: dict) -> str:
             f"{fmt_number(info.get('long_run_s', np.nan))} s fewer, as counted in each table){wall}.{quick}")
 
 
-def section(ctx: ReportContext) -> list[str]:
-    """The report's performance section (see the module docstring)."""
-    lines = [HEADING, ""]
-    folder = ctx.reports_dir / FOLDER
-    targets = _read(ctx, "targets.csv") if folder.is_dir() else None
-    if targets is None:
-        return lines + [f"No benchmark results in `{folder.name}/` (`reports/{FOLDER}/targets.csv` is missing): run "
-                        "`make bench` (`python -m study.bench`, about 10 minutes on 2 cores) to measure them.", ""]
-    info = _machine(ctx)
-    lines += ["The benchmark (`study/bench/`, `make bench`) measures, in one process on one machine, the "
-              "in-house solver's compiled path (generated numba code, compiled integration loop), its reference "
-              "path (Python + scipy) and Exudyn's index-3 and index-2 fixed-step solvers in two configurations: "
-              "*tuned* (as Exudyn's documentation recommends for speed: state-dependent load laws as symbolic user "
-              "functions of connectors, constant loads as plain loads, no numerical load Jacobian unless a Python "
-              "load needs it, one Newton Jacobian per step; the friction reading a joint reaction stays a Python "
-              "user function, as no Exudyn element exposes the reaction otherwise) and *Python user functions* "
-              "(every state-dependent law a Python callback, full Newton). Accuracy is max |Δq| over "
-              "the 0.01 s output samples and the coordinates against a compiled DOP853 reference at a tighter "
-              "tolerance; CPU time is the process time of the integration (Exudyn: of SolveDynamic; its own timer "
-              "is wall-clock time). Every Exudyn run entering a ratio is timed at least 3 times (median). Absolute "
-              "times depend on the host and its load; the targets are ratios taken within one run.", "",
-              _machine_text(info), "", "### Targets", "", _targets_table(targets), ""]
+def _intro_lines(info: dict) -> list[str]:
+    """What the benchmark measures and how, and the machine it ran on."""
+    return ["The benchmark (`study/bench/`, `make bench`) measures, in one process on one machine, the "
+            "in-house solver's compiled path (generated numba code, compiled integration loop), its reference "
+            "path (Python + scipy) and Exudyn's index-3 and index-2 fixed-step solvers in two configurations: "
+            "*tuned* (as Exudyn's documentation recommends for speed: state-dependent load laws as symbolic user "
+            "functions of connectors, constant loads as plain loads, no numerical load Jacobian unless a Python "
+            "load needs it, one Newton Jacobian per step; the friction reading a joint reaction stays a Python "
+            "user function, as no Exudyn element exposes the reaction otherwise) and *Python user functions* "
+            "(every state-dependent law a Python callback, full Newton). Accuracy is max |Δq| over "
+            "the 0.01 s output samples and the coordinates against a compiled DOP853 reference at a tighter "
+            "tolerance; CPU time is the process time of the integration (Exudyn: of SolveDynamic; its own timer "
+            "is wall-clock time). Every Exudyn run entering a ratio is timed at least 3 times (median). Absolute "
+            "times depend on the host and its load; the targets are ratios taken within one run.", "",
+            _machine_text(info), ""]
+
+
+def _targets_lines(targets: pd.DataFrame) -> list[str]:
+    """The targets' table and a count of the rows met, missed and without a verdict."""
+    lines = ["### Targets", "", _targets_table(targets), ""]
     verdict = targets["met"].astype(str).str.lower()
     missed = targets[verdict.eq("false")]
     judged = int(verdict.isin(["true", "false"]).sum())
@@ -189,7 +187,12 @@ def section(ctx: ReportContext) -> list[str]:
                             for t in missed.itertuples(index=False)) + ".", ""]
     else:
         lines += [f"All {judged} target rows met.", ""]
+    return lines
 
+
+def _accuracy_lines(ctx: ReportContext) -> list[str]:
+    """Work–precision: the figure, the in-house / Exudyn ratios and the CPU to each accuracy."""
+    lines = []
     wp = _read(ctx, "work_precision.csv")
     if wp is not None and len(wp):
         lines += ["### Work–precision", "",
@@ -209,6 +212,12 @@ def section(ctx: ReportContext) -> list[str]:
     if per_level is not None:
         lines += ["CPU time of the cheapest setting of every method reaching each accuracy (setting: rtol, or the "
                   "step h [s]):", "", _cpu_to_accuracy_table(per_level), ""]
+    return lines
+
+
+def _long_run_lines(ctx: ReportContext) -> list[str]:
+    """The compiled loop's time split, the quick-return over 20 s, and the references' errors."""
+    lines = []
     profile = _read(ctx, "overhead_profile.csv")
     if profile is not None and len(profile):
         lines += ["### Where the compiled loop's time goes", "",
@@ -235,6 +244,12 @@ def section(ctx: ReportContext) -> list[str]:
         lines += ["References and their estimated error (difference from runs at other tolerances; tighter "
                   "tolerances than the reference's are not more accurate: round-off sets the floor):", "",
                   _references_table(refs), ""]
+    return lines
+
+
+def _cost_lines(ctx: ReportContext) -> list[str]:
+    """One evaluation's cost, the scaling with simulated time and output density, memory and compile time."""
+    lines = []
     accel = _read(ctx, "acceleration_evaluation.csv")
     if accel is not None:
         lines += ["### Cost of one acceleration evaluation", "",
@@ -265,5 +280,18 @@ def section(ctx: ReportContext) -> list[str]:
         lines += ["One-off cost of the compiled path (first call in a subprocess; the code is cached on disk):", "",
                   _frame_table(compile_df, {"cache": "cache", "mechanism": "mechanism",
                                             "first_call_wall_s": "first call, wall [s]"}), ""]
+    return lines
+
+
+def section(ctx: ReportContext) -> list[str]:
+    """The report's performance section (see the module docstring)."""
+    lines = [HEADING, ""]
+    folder = ctx.reports_dir / FOLDER
+    targets = _read(ctx, "targets.csv") if folder.is_dir() else None
+    if targets is None:
+        return lines + [f"No benchmark results in `{folder.name}/` (`reports/{FOLDER}/targets.csv` is missing): run "
+                        "`make bench` (`python -m study.bench`, about 10 minutes on 2 cores) to measure them.", ""]
+    lines += _intro_lines(_machine(ctx)) + _targets_lines(targets)
+    lines += _accuracy_lines(ctx) + _long_run_lines(ctx) + _cost_lines(ctx)
     lines += [f"All files: `reports/{FOLDER}/` (CSV, `machine.json`, the benchmark's own `work_precision.png/.svg`).", ""]
     return lines

@@ -163,136 +163,174 @@ def _original_size(n40: pd.DataFrame) -> list[str]:
             + "; ".join(run(r) for r in n40.itertuples(index=False)) + "." + ratio, ""]
 
 
+def _four_bar_runs(ctx: ReportContext) -> pd.DataFrame | None:
+    """The table ``singular_four_bar_runs`` with each run's CPU from ``singular_four_bar_timing`` (NaN without it)."""
+    runs = ctx.table("singular_four_bar_runs")
+    timing = ctx.table("singular_four_bar_timing")
+    if runs is not None:   # CPU from timing/ (machine-dependent), matched on the run's identity
+        keys = ["N", "engine", "method", "setting"]
+        runs = runs.merge(timing, on=keys, how="left") if timing is not None else runs.assign(cpu_s=float("nan"))
+    return runs
+
+
+def _stopped_lines(stopped: pd.DataFrame) -> list[str]:
+    """Where the in-house methods that need a full-rank Φ_q stop."""
+    inhouse_stop = stopped[stopped["engine"] == "inhouse"]
+    if not len(inhouse_stop):
+        return []
+    return [f"Every in-house method that needs a full-rank Φ_q ({', '.join(sorted(set(inhouse_stop['method'])))}) "
+            f"stops at the first horizontal position, between t = {fmt_number(inhouse_stop['stopped_at_s'].min(), 6)} "
+            f"and {fmt_number(inhouse_stop['stopped_at_s'].max(), 6)} s, with a SingularConfigurationError naming "
+            "the time, the pose and the rank; this includes the papers' own R/D partitioning, whose Φ_v "
+            "becomes singular there for every choice of dependent coordinates.", ""]
+
+
+def _augmented_lagrangian_lines(passed: pd.DataFrame) -> list[str]:
+    """The acceleration-level augmented Lagrangian through the crossings: its energy jumps and why."""
+    al = passed[passed["method"].str.startswith("augmented_lagrangian")]
+    if not len(al):
+        return []
+    by_setting = "; ".join(f"{fmt_number(r.energy_drift_J)} J at {r.setting} (largest change between two samples "
+                           f"{fmt_number(r.largest_energy_step_J, 2)} J, {fmt_number(r.largest_energy_step_to_crossing_s, 2)} s "
+                           f"from a crossing; {fmt_int(r.solves_at_iteration_limit)} acceleration solves at the "
+                           f"iteration limit)" for r in al.itertuples(index=False))
+    al_verdicts = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, "
+                            f"{fmt_number(r.vx_B0_max_error_m_s, 3)} m/s (**{r.a02_verdict}**)"
+                            for r in al.itertuples(index=False))
+    return [f"The acceleration-level augmented Lagrangian (with post-step projection) runs through every "
+            f"singular position and stays on the parallelogram branch (crank spread ≤ "
+            f"{fmt_number(al['crank_spread_max_rad'].max(), 2)} rad, max|Φ| ≤ "
+            f"{fmt_number(al['max_abs_phi'].max(), 2)}), but it changes the energy in jumps, each within one "
+            f"output sample (0.01 s) of a crossing: {by_setting}. The drift does not shrink as the tolerance "
+            "tightens. Why: the method integrates the acceleration constraints Φ_q q̈ = γ only. Near a crossing "
+            "N singular values σ of Φ_q go to zero. A state off the constraints by δ (the integrator's local "
+            "error, and the projection's tolerance) makes these equations inconsistent by O(δ) in the "
+            "directions in which the mobility jumps, and they can absorb it only by accelerations of O(δ/σ) "
+            "there; the augmented Lagrangian's multiplier iteration, whose rate tends to 1 as σ → 0, stops "
+            "at its limit (the solves counted above). Nothing at acceleration level pulls the motion back: "
+            "the post-step projection puts q and q̇ back on the constraints, but the kinetic energy lost or "
+            "gained in the crossing steps stays lost or gained. By the benchmark's criterion (errors of x_B0 "
+            f"and of its rate against the exact motion, below): {al_verdicts}.", ""]
+
+
+def _index3_lines(passed: pd.DataFrame) -> list[str]:
+    """ALI3P through the crossings: its errors as the step is halved, their observed orders, and N = 40."""
+    i3 = passed[passed["method"] == INDEX3]
+    if not len(i3):
+        return []
+    n2, n40 = i3[i3["N"] == 2], i3[i3["N"] == 40]
+    n2 = n2.assign(h=[float(x.split("=")[1]) for x in n2["setting"]]).sort_values("h", ascending=False)
+    per_step = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, {fmt_number(r.vx_B0_max_error_m_s, 3)} "
+                         f"m/s, drift {fmt_number(r.energy_drift_J, 2)} J" for r in n2.itertuples(index=False))
+    ratio = np.log(n2["h"].to_numpy()[:-1] / n2["h"].to_numpy()[1:])
+    orders = {name: ", ".join(fmt_number(o, 3) for o in np.diff(-np.log(n2[column].to_numpy())) / ratio)
+              for name, column in (("x", "x_B0_max_error_m"), ("rate", "vx_B0_max_error_m_s"),
+                                   ("drift", "energy_drift_J"))}
+    big = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, {fmt_number(r.vx_B0_max_error_m_s, 3)} m/s "
+                    f"(**{r.a02_verdict}**), drift "
+                    f"{fmt_number(r.energy_drift_J, 2)} J, CPU {fmt_number(r.cpu_s, 2)} s"
+                    for r in n40.itertuples(index=False))
+    return ["The index-3 augmented Lagrangian with mass-orthogonal projections (ALI3P: Bayo and Ledesma; the "
+            "trapezoidal rule with the position constraints Φ = 0 held by a penalised Newton iteration at every "
+            "step, then q̇ and q̈ projected in the metric M + κ Φ_qᵀΦ_q, which stays positive-definite at the "
+            "singular positions) runs through every crossing"
+            + (" at the benchmark's high precision" if (i3["a02_verdict"] == "high precision").all() else
+               ", judged run by run below") + ". Halving the step, "
+            f"N = 2 (errors of B0's x and of its rate): {per_step}. Observed orders between successive steps: "
+            f"{orders['x']} (x), {orders['rate']} (rate), {orders['drift']} (drift), against the trapezoidal "
+            f"rule's 2. Steps at the Newton iteration's limit (accepted at round-off, "
+            f"`study.solver.index3.ALI3P`): {', '.join(fmt_int(v) for v in n2['solves_at_iteration_limit'])}. "
+            f"No energy jump stands out at the crossings: the largest change between two samples, "
+            f"{fmt_number(n2['largest_energy_step_J'].max(), 2)} J, lies "
+            f"{fmt_number(n2['largest_energy_step_to_crossing_s'].min(), 2)} s or more from a crossing. "
+            + (f"The original size, N = 40 over 20 s (steps at the iteration limit: "
+               f"{', '.join(fmt_int(v) for v in n40['solves_at_iteration_limit'])}): {big}." if len(n40) else ""),
+            ""]
+
+
+def _criterion_lines(passed: pd.DataFrame, traj: pd.DataFrame | None) -> list[str]:
+    """The benchmark's own criterion (B0 against the exact motion) and every judged run's verdict."""
+    judged = passed[passed["x_B0_max_error_m"].notna()]
+    if not (len(judged) and traj is not None and "reference (exact motion)" in traj):
+        return []
+    end = traj.iloc[-1]
+    extrapolated = richardson_second_order(*(values(f"a02_exudyn_b0_10s_{h}", table="benchmarks")
+                                             for h in ("h2_5e-4", "h1_25e-4")))[0]
+    errors = "; ".join(f"N = {r.N}, {r.method} {r.setting} ({r.engine}): {fmt_number(r.x_B0_max_error_m, 3)} m, "
+                       f"{fmt_number(r.vx_B0_max_error_m_s, 3)} m/s, **{r.a02_verdict}**"
+                       for r in judged.itertuples(index=False))
+    return [f"The benchmark's own criterion judges the position and velocity of B0 (here along x) against the "
+            f"exact motion: along the parallelogram "
+            f"branch the mechanism has one degree of freedom, the cranks' angle θ, with 2aLθ'' + bg cos θ = 0 "
+            f"(a = (N + 1)/6 + N/2, b = (N + 1)/2 + N), integrated to rtol 1e-13 independently of the study's "
+            f"model (`study/reference_solutions.py`; it gives x_B0({fmt_number(end['t_s'])} s) = "
+            f"{fmt_number(end['reference (exact motion)'], 6)} m, Exudyn's own IFToMM test model prints "
+            f"{fmt_number(tolerance('a02_published_x_b0_10s', table='benchmarks'), 5)} m; the step sequence "
+            f"that model lists extrapolates to x_B0 = {fmt_number(extrapolated[0], 8)} m, ẋ_B0 = "
+            f"{fmt_number(extrapolated[1], 8)} m/s at 10 s, which the exact motion matches within the "
+            "finest run's estimated error, `tests/test_reference_solutions.py`). High precision is "
+            f"max|x_B0 − reference| and max|ẋ_B0 − reference| ≤ "
+            f"{fmt_number(tolerance('a02_high_precision', table='benchmarks'))} (m, m/s), low precision ≤ "
+            f"{fmt_number(tolerance('a02_low_precision', table='benchmarks'))}, here over every output "
+            f"sample (0.01 s for N = 2, 0.05 s for N = 40): {errors}. The true motion is smooth: Exudyn and "
+            "ALI3P follow it, and the acceleration-level method's error is made by the method at the "
+            "crossings, not by the problem's conditioning. Its size depends on where the steps land around "
+            "each crossing, so that method's values are one host's (measured at DOP853 rtol 1e-12: x_B0(10 s) "
+            "= -0.615 m on one host, -0.117 m on another; section \"How far the numbers reproduce\").", ""]
+
+
+def _exudyn_lines(passed: pd.DataFrame) -> list[str]:
+    """Exudyn's solvers at N = 2 through the crossings."""
+    ex = passed[(passed["engine"] == "exudyn") & (passed["N"] == 2)]
+    if not len(ex):
+        return []
+    drift = "; ".join(f"{fmt_number(d)} J at {setting}" for setting, d in
+                      ex.groupby("setting", sort=False)["energy_drift_J"].max().items())
+    return [f"Exudyn's index-3 generalized-α runs through every singular position with or without "
+            f"`linearSolver.ignoreSingularJacobian` (energy drift {drift}; its verdicts by the benchmark's "
+            f"criterion are listed above); its index-2 (trapezoidal) solver stops.", ""]
+
+
+def _scaling_lines(scaling: pd.DataFrame | None) -> list[str]:
+    """Cost against the number of windows (table ``singular_four_bar_scaling``), or nothing without it."""
+    if scaling is None:
+        return []
+    header = ["N", "derivation [s]", "derivation + code generation [s]", "one evaluation [ms]",
+              "in-house CPU per simulated s", "in-house energy drift [J]", "Exudyn CPU per simulated s",
+              "Exudyn energy drift [J]", "horizon [s]"]
+    rows = [[fmt_int(r.N), fmt_number(r.derive_s, 2), fmt_number(r.derive_and_codegen_s, 2),
+             fmt_number(1e3 * r.eval_s, 2), fmt_number(r.inhouse_cpu_per_s, 2), fmt_number(r.inhouse_drift, 2),
+             fmt_number(r.exudyn_cpu_per_s, 2), fmt_number(r.exudyn_drift, 2), fmt_number(r.t_sim, 3)]
+            for r in scaling.itertuples(index=False)]
+    return ["Scaling with the number of windows (in-house: augmented Lagrangian + projection, DOP853 rtol 1e-8; "
+            "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), "",
+            "CPU times are process times measured on the shared 2-core machine (`python -m "
+            "study.studies.n_four_bar_scaling`, each size in a fresh process with an empty code cache), with "
+            "one BLAS thread as every simulation here runs (`study.simulate.one_blas_thread`): from N = 40 "
+            "OpenBLAS would split the augmented Lagrangian's Φ_qᵀΦ_q over two threads, whose waiting for a "
+            "busy core counts as process time and made one evaluation an order of magnitude slower. "
+            "The horizons hold one or two singular positions, whose neighbourhoods take most of the "
+            "in-house steps, so the CPU per simulated second is not monotonic in N.", ""]
+
+
 def _n_four_bar(ctx: ReportContext) -> list[str]:
+    """IFToMM A02 (tables ``singular_four_bar_*``): each method through the singular positions, then the criterion."""
     lines = ["### The N-four-bar through singular positions (IFToMM benchmark A02)", "",
              "N square windows of unit links (1 m, 1 kg, gravity 9.81 N/kg along −y), started with every crank "
              "vertical and B0 moving along +x at 1 m/s (the specification's figure). Whenever the cranks lie along "
              "the ground line, rank Φ_q drops from 2N to N and the mobility jumps from 1 to N + 1; the motion "
              "passes such a position every half turn. The reduced form N = 2 over 10 s, and the benchmark's "
              "original size N = 40 over 20 s.", ""]
-    runs = ctx.table("singular_four_bar_runs")
-    timing = ctx.table("singular_four_bar_timing")
-    if runs is not None:   # CPU from timing/ (machine-dependent), matched on the run's identity
-        keys = ["N", "engine", "method", "setting"]
-        runs = runs.merge(timing, on=keys, how="left") if timing is not None else runs.assign(cpu_s=float("nan"))
+    runs = _four_bar_runs(ctx)
     if runs is None:
         return lines + ["The singular study has not been run (`python -m study run singular`).", ""]
     passed = runs[runs["passed"].astype(str) == "True"]
     stopped = runs[runs["passed"].astype(str) != "True"]
     lines += [_runs_table(runs), ""]
-    inhouse_stop = stopped[stopped["engine"] == "inhouse"]
-    if len(inhouse_stop):
-        lines += [f"Every in-house method that needs a full-rank Φ_q ({', '.join(sorted(set(inhouse_stop['method'])))}) "
-                  f"stops at the first horizontal position, between t = {fmt_number(inhouse_stop['stopped_at_s'].min(), 6)} "
-                  f"and {fmt_number(inhouse_stop['stopped_at_s'].max(), 6)} s, with a SingularConfigurationError naming "
-                  "the time, the pose and the rank; this includes the papers' own R/D partitioning, whose Φ_v "
-                  "becomes singular there for every choice of dependent coordinates.", ""]
-    al = passed[passed["method"].str.startswith("augmented_lagrangian")]
-    if len(al):
-        by_setting = "; ".join(f"{fmt_number(r.energy_drift_J)} J at {r.setting} (largest change between two samples "
-                               f"{fmt_number(r.largest_energy_step_J, 2)} J, {fmt_number(r.largest_energy_step_to_crossing_s, 2)} s "
-                               f"from a crossing; {fmt_int(r.solves_at_iteration_limit)} acceleration solves at the "
-                               f"iteration limit)" for r in al.itertuples(index=False))
-        al_verdicts = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, "
-                                f"{fmt_number(r.vx_B0_max_error_m_s, 3)} m/s (**{r.a02_verdict}**)"
-                                for r in al.itertuples(index=False))
-        lines += [f"The acceleration-level augmented Lagrangian (with post-step projection) runs through every "
-                  f"singular position and stays on the parallelogram branch (crank spread ≤ "
-                  f"{fmt_number(al['crank_spread_max_rad'].max(), 2)} rad, max|Φ| ≤ "
-                  f"{fmt_number(al['max_abs_phi'].max(), 2)}), but it changes the energy in jumps, each within one "
-                  f"output sample (0.01 s) of a crossing: {by_setting}. The drift does not shrink as the tolerance "
-                  "tightens. Why: the method integrates the acceleration constraints Φ_q q̈ = γ only. Near a crossing "
-                  "N singular values σ of Φ_q go to zero. A state off the constraints by δ (the integrator's local "
-                  "error, and the projection's tolerance) makes these equations inconsistent by O(δ) in the "
-                  "directions in which the mobility jumps, and they can absorb it only by accelerations of O(δ/σ) "
-                  "there; the augmented Lagrangian's multiplier iteration, whose rate tends to 1 as σ → 0, stops "
-                  "at its limit (the solves counted above). Nothing at acceleration level pulls the motion back: "
-                  "the post-step projection puts q and q̇ back on the constraints, but the kinetic energy lost or "
-                  "gained in the crossing steps stays lost or gained. By the benchmark's criterion (errors of x_B0 "
-                  f"and of its rate against the exact motion, below): {al_verdicts}.", ""]
-    i3 = passed[passed["method"] == INDEX3]
-    if len(i3):
-        n2, n40 = i3[i3["N"] == 2], i3[i3["N"] == 40]
-        n2 = n2.assign(h=[float(x.split("=")[1]) for x in n2["setting"]]).sort_values("h", ascending=False)
-        per_step = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, {fmt_number(r.vx_B0_max_error_m_s, 3)} "
-                             f"m/s, drift {fmt_number(r.energy_drift_J, 2)} J" for r in n2.itertuples(index=False))
-        ratio = np.log(n2["h"].to_numpy()[:-1] / n2["h"].to_numpy()[1:])
-        orders = {name: ", ".join(fmt_number(o, 3) for o in np.diff(-np.log(n2[column].to_numpy())) / ratio)
-                  for name, column in (("x", "x_B0_max_error_m"), ("rate", "vx_B0_max_error_m_s"),
-                                       ("drift", "energy_drift_J"))}
-        big = "; ".join(f"{r.setting}: {fmt_number(r.x_B0_max_error_m, 3)} m, {fmt_number(r.vx_B0_max_error_m_s, 3)} m/s "
-                        f"(**{r.a02_verdict}**), drift "
-                        f"{fmt_number(r.energy_drift_J, 2)} J, CPU {fmt_number(r.cpu_s, 2)} s"
-                        for r in n40.itertuples(index=False))
-        lines += ["The index-3 augmented Lagrangian with mass-orthogonal projections (ALI3P: Bayo and Ledesma; the "
-                  "trapezoidal rule with the position constraints Φ = 0 held by a penalised Newton iteration at every "
-                  "step, then q̇ and q̈ projected in the metric M + κ Φ_qᵀΦ_q, which stays positive-definite at the "
-                  "singular positions) runs through every crossing"
-                  + (" at the benchmark's high precision" if (i3["a02_verdict"] == "high precision").all() else
-                     ", judged run by run below") + ". Halving the step, "
-                  f"N = 2 (errors of B0's x and of its rate): {per_step}. Observed orders between successive steps: "
-                  f"{orders['x']} (x), {orders['rate']} (rate), {orders['drift']} (drift), against the trapezoidal "
-                  f"rule's 2. Steps at the Newton iteration's limit (accepted at round-off, "
-                  f"`study.solver.index3.ALI3P`): {', '.join(fmt_int(v) for v in n2['solves_at_iteration_limit'])}. "
-                  f"No energy jump stands out at the crossings: the largest change between two samples, "
-                  f"{fmt_number(n2['largest_energy_step_J'].max(), 2)} J, lies "
-                  f"{fmt_number(n2['largest_energy_step_to_crossing_s'].min(), 2)} s or more from a crossing. "
-                  + (f"The original size, N = 40 over 20 s (steps at the iteration limit: "
-                     f"{', '.join(fmt_int(v) for v in n40['solves_at_iteration_limit'])}): {big}." if len(n40) else ""),
-                  ""]
+    lines += _stopped_lines(stopped) + _augmented_lagrangian_lines(passed) + _index3_lines(passed)
     lines += _original_size(runs[runs["N"] == 40])
-    judged = passed[passed["x_B0_max_error_m"].notna()]
     traj = ctx.table("singular_four_bar_x_B0")
-    if len(judged) and traj is not None and "reference (exact motion)" in traj:
-        end = traj.iloc[-1]
-        extrapolated = richardson_second_order(*(values(f"a02_exudyn_b0_10s_{h}", table="benchmarks")
-                                                 for h in ("h2_5e-4", "h1_25e-4")))[0]
-        errors = "; ".join(f"N = {r.N}, {r.method} {r.setting} ({r.engine}): {fmt_number(r.x_B0_max_error_m, 3)} m, "
-                           f"{fmt_number(r.vx_B0_max_error_m_s, 3)} m/s, **{r.a02_verdict}**"
-                           for r in judged.itertuples(index=False))
-        lines += [f"The benchmark's own criterion judges the position and velocity of B0 (here along x) against the "
-                  f"exact motion: along the parallelogram "
-                  f"branch the mechanism has one degree of freedom, the cranks' angle θ, with 2aLθ'' + bg cos θ = 0 "
-                  f"(a = (N + 1)/6 + N/2, b = (N + 1)/2 + N), integrated to rtol 1e-13 independently of the study's "
-                  f"model (`study/reference_solutions.py`; it gives x_B0({fmt_number(end['t_s'])} s) = "
-                  f"{fmt_number(end['reference (exact motion)'], 6)} m, Exudyn's own IFToMM test model prints "
-                  f"{fmt_number(tolerance('a02_published_x_b0_10s', table='benchmarks'), 5)} m; the step sequence "
-                  f"that model lists extrapolates to x_B0 = {fmt_number(extrapolated[0], 8)} m, ẋ_B0 = "
-                  f"{fmt_number(extrapolated[1], 8)} m/s at 10 s, which the exact motion matches within the "
-                  "finest run's estimated error, `tests/test_reference_solutions.py`). High precision is "
-                  f"max|x_B0 − reference| and max|ẋ_B0 − reference| ≤ "
-                  f"{fmt_number(tolerance('a02_high_precision', table='benchmarks'))} (m, m/s), low precision ≤ "
-                  f"{fmt_number(tolerance('a02_low_precision', table='benchmarks'))}, here over every output "
-                  f"sample (0.01 s for N = 2, 0.05 s for N = 40): {errors}. The true motion is smooth: Exudyn and "
-                  "ALI3P follow it, and the acceleration-level method's error is made by the method at the "
-                  "crossings, not by the problem's conditioning. Its size depends on where the steps land around "
-                  "each crossing, so that method's values are one host's (measured at DOP853 rtol 1e-12: x_B0(10 s) "
-                  "= -0.615 m on one host, -0.117 m on another; section \"How far the numbers reproduce\").", ""]
-    ex = passed[(passed["engine"] == "exudyn") & (passed["N"] == 2)]
-    if len(ex):
-        drift = "; ".join(f"{fmt_number(d)} J at {setting}" for setting, d in
-                          ex.groupby("setting", sort=False)["energy_drift_J"].max().items())
-        lines += [f"Exudyn's index-3 generalized-α runs through every singular position with or without "
-                  f"`linearSolver.ignoreSingularJacobian` (energy drift {drift}; its verdicts by the benchmark's "
-                  f"criterion are listed above); its index-2 (trapezoidal) solver stops.", ""]
+    lines += _criterion_lines(passed, traj) + _exudyn_lines(passed)
     if traj is not None and len(traj.columns) > 1:
         lines += [_x_b0_figure(ctx), ""]
-    scaling = ctx.table("singular_four_bar_scaling")
-    if scaling is not None:
-        header = ["N", "derivation [s]", "derivation + code generation [s]", "one evaluation [ms]",
-                  "in-house CPU per simulated s", "in-house energy drift [J]", "Exudyn CPU per simulated s",
-                  "Exudyn energy drift [J]", "horizon [s]"]
-        rows = [[fmt_int(r.N), fmt_number(r.derive_s, 2), fmt_number(r.derive_and_codegen_s, 2),
-                 fmt_number(1e3 * r.eval_s, 2), fmt_number(r.inhouse_cpu_per_s, 2), fmt_number(r.inhouse_drift, 2),
-                 fmt_number(r.exudyn_cpu_per_s, 2), fmt_number(r.exudyn_drift, 2), fmt_number(r.t_sim, 3)]
-                for r in scaling.itertuples(index=False)]
-        lines += ["Scaling with the number of windows (in-house: augmented Lagrangian + projection, DOP853 rtol 1e-8; "
-                  "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), "",
-                  "CPU times are process times measured on the shared 2-core machine (`python -m "
-                  "study.studies.n_four_bar_scaling`, each size in a fresh process with an empty code cache), with "
-                  "one BLAS thread as every simulation here runs (`study.simulate.one_blas_thread`): from N = 40 "
-                  "OpenBLAS would split the augmented Lagrangian's Φ_qᵀΦ_q over two threads, whose waiting for a "
-                  "busy core counts as process time and made one evaluation an order of magnitude slower. "
-                  "The horizons hold one or two singular positions, whose neighbourhoods take most of the "
-                  "in-house steps, so the CPU per simulated second is not monotonic in N.", ""]
-    return lines
+    return lines + _scaling_lines(ctx.table("singular_four_bar_scaling"))
