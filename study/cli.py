@@ -12,6 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from study.output_folder import claim_output_folder
 from study.pipeline import CASES_DIR
 
 REPORTS = Path("reports")
@@ -33,7 +34,7 @@ EXAMPLES = {
 def _initial(args: argparse.Namespace) -> int:
     from study.initial_report import initial_conditions_table, write_initial_conditions
 
-    path = write_initial_conditions(args.out / "tables")
+    path = write_initial_conditions(claim_output_folder(args.out) / "tables")
     with_pd = initial_conditions_table()
     print(with_pd.to_string(index=False))
     print(f"wrote {path}")
@@ -44,7 +45,7 @@ def _errata(args: argparse.Namespace) -> int:
     from study.errata.table import update_errata
     from study.model.compile import cache_dir
 
-    path, reused = update_errata(args.out / "tables", cache_dir())
+    path, reused = update_errata(claim_output_folder(args.out) / "tables", cache_dir())
     if reused:
         print(f"errata: the inputs (package source, reference/*.toml, sympy) are unchanged since {path} and "
               f"{path.with_suffix('.csv').name} were written: reused them")
@@ -112,6 +113,7 @@ def method_options(items: list[str] | None, method: str) -> dict:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from study.results import check_save_target
     from study.simulate import DEFAULT_OUTPUT_STEP, check_arguments, resolve, simulate
 
     options = method_options(args.option, args.method)
@@ -133,6 +135,7 @@ def _simulate(args: argparse.Namespace) -> int:
     check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
                     names=SIMULATE_FLAGS)
     _writable(args.out, "--out")
+    check_save_target(args.out)   # a user's folder or file there is refused before the run
     result = simulate(target, **run, **options,
                       progress=ProgressPrinter(args.t_end) if args.backend == "reference" else None)
     path = result.save(args.out)
@@ -270,6 +273,7 @@ def _reproduce(args: argparse.Namespace) -> int:
     from study.pipeline import PIPELINE_RECORD, save_record
 
     record_root = _record_root(args)
+    claim_output_folder(args.out)   # before the errata process starts writing there
     stages = {}
     code = 0
     # The errata check (sympy, one process) runs alongside the initial conditions and the cases; its output follows.

@@ -262,7 +262,7 @@ def test_summary_and_section_on_a_short_horizon(tmp_path):
     assert (orders >= tolerance("min_order", table="cross_validation")).all(), orders
     assert tables["moving_friction_eps"]["shrinking"].all()
     reports = tmp_path / "reports"
-    write_tables(tables, reports)
+    write_tables(tables, reports, "python -m study run moving_friction")
     cl = dataclasses.replace(case_list(), cases=tuple(cases))
     ctx = ReportContext(reports, store, {"moving_friction": cl})
     from study.report.sections import moving_friction as section
