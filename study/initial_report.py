@@ -43,4 +43,5 @@ def write_initial_conditions(out_dir: Path) -> Path:
     from study.pipeline.tables import write_table
 
     text = initial_conditions_table().to_csv(index=False, float_format="%.10g", lineterminator="\n")
-    return write_table(Path(out_dir) / "initial_conditions.csv", text, f"python -m study initial --out {Path(out_dir).parent}")
+    out_dir = Path(out_dir)
+    return write_table(out_dir / "initial_conditions.csv", text, f"python -m study initial --out {out_dir.parent}")

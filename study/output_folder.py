@@ -56,7 +56,7 @@ def claim_output_folder(folder: Path, argument: str = "--out") -> Path:
 
 
 def require_output_folder(folder: Path, argument: str = "--out") -> Path:
-    """``folder`` if it exists and carries the marker (a folder study wrote, to be read); OutputFolderError otherwise."""
+    """``folder`` if it exists and carries the marker (a folder study wrote, to be read); else OutputFolderError."""
     folder = Path(folder)
     if not folder.is_dir():
         raise OutputFolderError(f"{argument} {folder}: " + ("not a folder" if folder.exists() else "no such folder")

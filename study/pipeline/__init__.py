@@ -27,10 +27,11 @@ from study.pipeline.tables import (CHECKSUMS, TABLE_FLOAT_FORMAT, check_tables, 
                                    write_table, write_tables)
 
 __all__ = [
-    "BACKENDS", "CASES_DIR", "CHECKSUMS", "ENGINES", "ENTRY_MODULES", "NUMERIC_PACKAGES", "PIPELINE_RECORD", "SAMPLE_SUFFIX",
-    "TABLE_FLOAT_FORMAT", "Case", "CaseList", "CaseListError", "CorruptResult", "InlineExecutor", "MissingResult",
-    "Progress", "RunSummary", "Store", "backend_agreement", "backend_cpu", "check_tables", "code_version", "environment_workers",
-    "failures_table", "find", "find_one", "load_case_list", "load_case_lists", "make_executor", "mechanism_hash",
-    "read_table", "recorded", "run_case", "run_cases", "run_pipeline", "sample_agreement", "save_record", "summarize",
-    "summary_function", "verified_text", "write_table", "write_tables",
+    "BACKENDS", "CASES_DIR", "CHECKSUMS", "ENGINES", "ENTRY_MODULES", "NUMERIC_PACKAGES", "PIPELINE_RECORD",
+    "SAMPLE_SUFFIX", "TABLE_FLOAT_FORMAT", "Case", "CaseList", "CaseListError", "CorruptResult", "InlineExecutor",
+    "MissingResult", "Progress", "RunSummary", "Store", "backend_agreement", "backend_cpu", "check_tables",
+    "code_version", "environment_workers", "failures_table", "find", "find_one", "load_case_list",
+    "load_case_lists", "make_executor", "mechanism_hash", "read_table", "recorded", "run_case", "run_cases",
+    "run_pipeline", "sample_agreement", "save_record", "summarize", "summary_function", "verified_text",
+    "write_table", "write_tables",
 ]

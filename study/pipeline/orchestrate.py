@@ -126,8 +126,8 @@ def run_pipeline(reports_dir: Path, cache_root: Path, studies: Iterable[str] | N
     write_tables({"failed_cases": failures_table(case_lists, store)}, reports_dir, everything)
     if any(cl.samples for cl in case_lists):
         agreement = backend_agreement(case_lists, store)
-        write_tables({"backend_agreement": agreement, "backend_cpu_timing": backend_cpu(case_lists, store)}, reports_dir,
-                     everything)
+        write_tables({"backend_agreement": agreement, "backend_cpu_timing": backend_cpu(case_lists, store)},
+                     reports_dir, everything)
         for _, r in agreement[~agreement["agree"].astype(bool)].iterrows():   # a finding: said, never only tabulated
             print(f"compiled and reference path DISAGREE on {r['case']}: max|dq| {r['max_abs_dq']:.3g} rad > bound "
                   f"{r['bound']:.3g} ({r['rule']}); tables/backend_agreement.csv", file=stream)

@@ -87,8 +87,8 @@ add(G, "report_initial_conditions_edited",
     "initial_conditions.csv", "python -m study initial")
 add(G, "report_errata_markdown_edited", report_after(text_edit("tables/errata.md", lambda t: t + "\nan edit\n")), 2,
     "errata.md", "python -m study errata")
-add(G, "report_timing_edited", report_after(text_edit("timing/sliding_mode_timing.csv", lambda t: t.replace("1", "2", 3))),
-    2, "sliding_mode_timing.csv", "python -m study run sliding_mode")
+add(G, "report_timing_edited",
+    report_after(text_edit("timing/sliding_mode_timing.csv", lambda t: t.replace("1", "2", 3))), 2, "sliding_mode_timing.csv", "python -m study run sliding_mode")
 
 
 def remove(rel: str):
