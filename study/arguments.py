@@ -11,7 +11,9 @@ import argparse
 import datetime
 import math
 import numbers
+import os
 import re
+import tempfile
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -122,3 +124,19 @@ class Parser(argparse.ArgumentParser):
 
 
 _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
+def writable(path: Path, argument: str, folder: bool = False) -> None:
+    """A ValueError naming the argument unless the output folder (``path`` itself if ``folder``, else its
+    parent) exists and is writable, or can be created."""
+    folder = Path(path) if folder else Path(path).parent
+    existing = next((p for p in [folder, *folder.parents] if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        raise ValueError(f"{argument} {path}: {existing} is a file, not a folder")
+    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{argument} {path}: no permission to write in {existing}")
+    try:  # what access() cannot tell (a read-only or virtual file system, root's permissions)
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{argument} {path}: cannot write in {existing} ({exc.strerror or exc})") from None

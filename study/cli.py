@@ -4,18 +4,16 @@ from __future__ import annotations
 
 import argparse
 import inspect
-import json
 import os
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 from study import arguments
+from study import cli_pipeline
+from study.arguments import writable
 from study.pipeline import CASES_DIR
 
-REPORTS = Path("reports")
+REPORTS = cli_pipeline.REPORTS
 # One example per command, shown at the end of its --help.
 EXAMPLES = {
     "initial": "python -m study initial --out reports",
@@ -29,29 +27,6 @@ EXAMPLES = {
     "describe": "python -m study describe quick_return --variant guide_friction",
     "validate": "python -m study validate examples/scotch_yoke/scotch_yoke.py --t-end 1 --out /tmp/yoke",
 }
-
-
-def _initial(args: argparse.Namespace) -> int:
-    from study.initial_report import initial_conditions_table, write_initial_conditions
-
-    path = write_initial_conditions(args.out / "tables")
-    with_pd = initial_conditions_table()
-    print(with_pd.to_string(index=False))
-    print(f"wrote {path}")
-    return 0
-
-
-def _errata(args: argparse.Namespace) -> int:
-    from study.errata.table import update_errata
-    from study.model.compile import cache_dir
-
-    path, reused = update_errata(args.out / "tables", cache_dir())
-    if reused:
-        print(f"errata: the inputs (package source, reference/*.toml, sympy) are unchanged since {path} and "
-              f"{path.with_suffix('.csv').name} were written: reused them")
-    else:
-        print(path.read_text())
-    return 0
 
 
 def _friction_text(result, chosen_by_default: bool) -> str:
@@ -106,6 +81,7 @@ def method_options(items: list[str] | None, method: str) -> dict:
 
 def _simulate(args: argparse.Namespace) -> int:
     from study.progress import ProgressPrinter
+    from study.results import check_save_target
     from study.simulate import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments, default_friction, resolve, \
         simulate
 
@@ -127,7 +103,8 @@ def _simulate(args: argparse.Namespace) -> int:
         run["friction"] = default_friction(eom, None if mech is None else mech.parameters) or "none"
     check_arguments(**run, progress=None, resistance_reading=None, check=True, min_step=None, max_output_bytes=None,
                     names=SIMULATE_FLAGS)
-    _writable(out, "--out")
+    writable(out, "--out")
+    check_save_target(out)   # a user's folder or file there is refused before the run
     if args.friction is None:   # checked with the treatment it stands for; the run records that it was the default
         run["friction"] = DEFAULT_FRICTION
     result = simulate(target, **run, **options,
@@ -160,7 +137,7 @@ def _validate(args: argparse.Namespace) -> int:
     settings = Settings(**{k: getattr(args, k) for k in ("t_end", "output_step", "h", "levels", "friction_eps")
                            if getattr(args, k) is not None})
     out = args.out or Path("validation") / Path(args.file).stem
-    _writable(out, "--out", folder=True)
+    writable(out, "--out", folder=True)
     tables = validate(load_mechanism(args.file, args.variant), settings, out,
                       say=lambda text: print(text, file=sys.stderr))
     failed = [*tables["in_house"].loc[tables["in_house"]["error"] != "", "run"],
@@ -177,158 +154,20 @@ def _bench(args: argparse.Namespace) -> int:
     return run(args)
 
 
-def _run(args: argparse.Namespace) -> int:
-    from study.model.compile import cache_dir
-    from study.pipeline import CaseListError, environment_workers, run_pipeline
-
-    _writable(args.out, "--out", folder=True)
-    try:
-        record = run_pipeline(args.out, cache_dir(), studies=args.studies or None,
-                              workers=environment_workers() if args.workers is None else args.workers,
-                              scheduler=args.scheduler, folder=args.cases, record_root=_record_root(args))
-    except CaseListError as exc:
-        print(f"error: --cases {args.cases}: {exc}", file=sys.stderr)
-        return 2
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    for study, r in record["studies"].items():
-        if r.get("expected_failures"):
-            print(f"{study}: {len(r['expected_failures'])} cases stopped with the error their case list expects "
-                  f"(expect_error; listed in tables/failed_cases.csv)", file=sys.stderr)
-    failed = {s: r["failed"] for s, r in record["studies"].items() if r["failed"]}
-    for study, cases in failed.items():
-        for name, error in cases.items():
-            print(f"FAILED {name}: {error}", file=sys.stderr)
-    broken = {s: r["summary_error"] for s, r in record["studies"].items() if r.get("summary_error")}
-    energy = record.get("energy_balance_flags", {})
-    for name, why in energy.items():
-        print(f"FAILED energy balance of {name}: {why}", file=sys.stderr)
-    return 1 if failed or broken or energy else 0
-
-
-def _record_root(args: argparse.Namespace) -> Path:
-    """Where a pipeline run keeps its record: the cache root for reference/cases; for another case folder
-    its own --out (required: the default reports/ holds the tables of reference/cases, tracked in git)."""
-    from study.model.compile import cache_dir
-
-    if Path(args.cases).resolve() == CASES_DIR.resolve():
-        return cache_dir()
-    if Path(args.out).resolve() == REPORTS.resolve():
-        raise ValueError(f"--cases {args.cases} is not the default case folder: give it its own --out "
-                         f"(the default {REPORTS}/ holds the tracked tables of {CASES_DIR.name}/)")
-    return Path(args.out) / ".pipeline"
-
-
-def _writable(path: Path, argument: str, folder: bool = False) -> None:
-    """A ValueError naming the argument unless the output folder (``path`` itself if ``folder``, else its
-    parent) exists and is writable, or can be created."""
-    folder = Path(path) if folder else Path(path).parent
-    existing = next((p for p in [folder, *folder.parents] if p.exists()), None)
-    if existing is not None and not existing.is_dir():
-        raise ValueError(f"{argument} {path}: {existing} is a file, not a folder")
-    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
-        raise ValueError(f"{argument} {path}: no permission to write in {existing}")
-    try:  # what access() cannot tell (a read-only or virtual file system, root's permissions)
-        with tempfile.TemporaryFile(dir=existing):
-            pass
-    except OSError as exc:
-        raise ValueError(f"{argument} {path}: cannot write in {existing} ({exc.strerror or exc})") from None
-
-
-def _report(args: argparse.Namespace) -> int:
-    from study.model.compile import cache_dir
-    from study.report import build_report
-
-    print(f"report: {build_report(args.out, cache_dir(), getattr(args, 'cases', CASES_DIR)).resolve()}")
-    return 0
-
-
-def _reproduce(args: argparse.Namespace) -> int:
-    from study.pipeline import PIPELINE_RECORD, save_record
-
-    record_root = _record_root(args)
-    stages = {}
-    code = 0
-    # The errata check (sympy, one process) runs alongside the initial conditions and the cases; its output follows.
-    t_errata = time.perf_counter()
-    errata = subprocess.Popen([sys.executable, "-m", "study", "errata", "--out", str(args.out)],
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    for name, step in (("initial", _initial), ("run", _run), ("errata", None), ("report", _report)):
-        if name == "errata":
-            output = errata.communicate()[0]
-            stages["errata"] = time.perf_counter() - t_errata
-            print(output, end="")
-            if errata.returncode:
-                print(f"error: the errata check failed (exit {errata.returncode})", file=sys.stderr)
-                return errata.returncode if errata.returncode > 0 else 2
-            continue
-        if name == "report":  # the manifest shows the wall time of every stage before the report
-            record_path = record_root / PIPELINE_RECORD
-            record = json.loads(record_path.read_text())
-            record["stages"].update({k: stages[k] for k in ("initial", "errata")})
-            save_record(record, record_root)
-        t0 = time.perf_counter()
-        try:
-            code = step(args) or code
-        except BaseException:
-            _stop(errata)
-            raise
-        stages[name] = time.perf_counter() - t0
-        if code and not (name == "run" and code == 1):  # failed cases (1) are reported; errors stop
-            _stop(errata)
-            return code
-    print("wall time per stage (errata alongside initial and run): "
-          + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items())
-          + f"; this host's pace now: {_evaluation_us():.2f} us per compiled quick-return evaluation",
-          file=sys.stderr)
-    print(f"(details per study: {record_root / PIPELINE_RECORD})", file=sys.stderr)
-    print(f"report: {(args.out / 'index.md').resolve()} and {(args.out / 'report.html').resolve()}")
-    return code
-
-
-def _stop(process: subprocess.Popen) -> None:
-    """End a helper process and reap it."""
-    process.kill()
-    process.wait()
-
-
-def _evaluation_us() -> float:
-    """µs of one compiled quick-return acceleration evaluation (the benchmark's acceleration_evaluation row), timed
-    now: the pace of this host, for reading the stages' wall times."""
-    from study.bench.evaluations import eval_cost_us
-
-    return eval_cost_us("quick_return", "smooth_cutting", {}, 5, 20000)
-
-
-def _verify(args: argparse.Namespace) -> int:
-    from study.model.compile import cache_dir
-    from study.pipeline import environment_workers
-    from study.verify import main_verify
-
-    for ulps in args.ulps or []:
-        if ulps == 0:
-            raise ValueError("--ulps 0 moves nothing: the perturbed run would be the run itself (give e.g. 4 or -4)")
-    if args.ulps and not args.perturb:
-        raise ValueError(f"--ulps {args.ulps[0]} applies to --perturb only")
-    return main_verify(args.out, cache_dir(), args.studies or None, args.workers or environment_workers(),
-                       args.perturb, args.ulps, args.cases)
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = arguments.Parser(prog="python -m study", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     for name, func, text in (
-        ("initial", _initial, "consistent initial conditions and the printed ones' residuals"),
-        ("errata", _errata, "check the papers' printed formulas against the derived equations"),
-        ("report", _report, "figures, tables, index.md and report.html from saved results only"),
+        ("initial", cli_pipeline.initial, "consistent initial conditions and the printed ones' residuals"),
+        ("errata", cli_pipeline.errata, "check the papers' printed formulas against the derived equations"),
+        ("report", cli_pipeline.report, "figures, tables, index.md and report.html from saved results only"),
     ):
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
         p.set_defaults(func=func)
     for name, func, text in (
-        ("run", _run, "run the studies' cases (reference/cases/*.toml) that are not cached, write their tables"),
-        ("reproduce", _reproduce, "initial conditions, errata, every study, and the report"),
+        ("run", cli_pipeline.run, "run the studies' cases (reference/cases/*.toml) that are not cached, write their tables"),
+        ("reproduce", cli_pipeline.reproduce, "initial conditions, errata, every study, and the report"),
     ):
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
@@ -354,7 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the conditioning check: writes <out>/tables/perturbation_check.csv")
     p.add_argument("--ulps", type=int, action="append", default=None,
                    help="perturbation of q(0), qd(0) in ulps, repeatable (default: +4 and -4)")
-    p.set_defaults(func=_verify)
+    p.set_defaults(func=cli_pipeline.verify)
 
     from study.params import available_mechanisms
     from study.solver.accelerations import ACCELERATION_SOLVERS

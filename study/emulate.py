@@ -72,8 +72,10 @@ def show(host: str) -> str:
 
 def committed_snapshot(dest: Path) -> Path:
     """``reports/tables`` as committed at HEAD, written to ``dest/tables`` (replacing what was there)."""
-    shutil.rmtree(dest, ignore_errors=True)
-    dest.mkdir(parents=True)
+    from study.output_folder import claim_output_folder
+
+    shutil.rmtree(dest, ignore_errors=True)   # emulate's own scratch folder in the cache
+    claim_output_folder(dest)   # marked: study verify --out dest reads it as a report folder
     archive = subprocess.run(["git", "-C", str(ROOT), "archive", "HEAD", "reports/tables"], capture_output=True,
                              check=True).stdout
     with tarfile.open(fileobj=io.BytesIO(archive)) as tar:

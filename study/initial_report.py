@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from study.integrity import atomic_write
 from study.mechanisms import initial_state, load
 from study.params import available_mechanisms
 from study.solver.initial import constraint_residuals
@@ -40,7 +39,9 @@ def initial_conditions_table() -> pd.DataFrame:
 
 
 def write_initial_conditions(out_dir: Path) -> Path:
-    out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "initial_conditions.csv"
-    atomic_write(path, initial_conditions_table().to_csv(index=False, float_format="%.10g", lineterminator="\n"))
-    return path
+    """Write ``initial_conditions.csv`` into ``out_dir`` (a report's ``tables/``), recorded beside it."""
+    from study.pipeline.tables import write_table
+
+    text = initial_conditions_table().to_csv(index=False, float_format="%.10g", lineterminator="\n")
+    out_dir = Path(out_dir)
+    return write_table(out_dir / "initial_conditions.csv", text, f"python -m study initial --out {out_dir.parent}")

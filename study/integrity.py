@@ -11,6 +11,7 @@ import contextlib
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Mapping
@@ -55,7 +56,7 @@ def atomic_write(path: Path, text: str) -> None:
 def stage_files(files: Mapping[Path, str]) -> list[tuple[Path, Path]]:
     """Write each text (with :func:`atomic_write`) to a private staging folder beside its file; replace nothing.
 
-    Returns the (staged, final) pairs for :func:`commit_staged`. A failure while writing (disk full, an
+    Returns the (staged, final) pairs for :func:`replace_together`. A failure while writing (disk full, an
     interruption) removes what was staged and propagates: no file was replaced.
     """
     staged: list[tuple[Path, Path]] = []
@@ -69,27 +70,67 @@ def stage_files(files: Mapping[Path, str]) -> list[tuple[Path, Path]]:
             staged.append((folders[path.parent] / path.name, path))
             atomic_write(staged[-1][0], text)
     except BaseException:
-        _discard_staged(staged, folders.values())
+        _discard_staged([tmp for tmp, _ in staged], folders.values())
         raise
     return staged
 
 
-def commit_staged(staged: list[tuple[Path, Path]]) -> None:
-    """Rename files written by :func:`stage_files` into place, in order, and remove the staging folders.
+class PartlyReplacedError(OSError):
+    """Renaming a set of files into place failed, and so did putting back the previous version of one already
+    replaced: the set is now part new, part old."""
 
-    Renames within a folder do not fail in practice; if one did (or the process were interrupted between
-    two), the files before it are new and the rest keep their previous content.
+
+def replace_together(staged: list[tuple[Path, Path]]) -> None:
+    """Rename files written by :func:`stage_files` into place as one set, and remove the staging folders.
+
+    Before the first rename, each file to be replaced is kept (a hard link in the staging folder). If a rename
+    fails or is interrupted (any exception, Ctrl-C included), the files already renamed get their previous content
+    back (or are removed, where there was none) before the exception propagates: the set is all new or all old.
+    Only if putting one back fails too is it left part new, part old: :class:`PartlyReplacedError` says so.
     """
+    kept: dict[Path, Path] = {}
+    done: list[Path] = []
     try:
         for tmp, path in staged:
+            if path.exists():
+                kept[path] = tmp.with_name(tmp.name + ".previous")
+                _keep(path, kept[path])
+        for tmp, path in staged:
             os.replace(tmp, path)
+            done.append(path)
+    except BaseException as exc:
+        _put_back(done, kept, exc)
+        raise
     finally:
-        _discard_staged(staged, {tmp.parent for tmp, _ in staged})
+        _discard_staged([tmp for tmp, _ in staged] + list(kept.values()), {tmp.parent for tmp, _ in staged})
 
 
-def _discard_staged(staged, folders) -> None:
-    for tmp, _ in staged:
-        tmp.unlink(missing_ok=True)
+def _keep(path: Path, keep: Path) -> None:
+    """``keep`` holding ``path``'s current content: a hard link (no copy), or a copy where links are not supported."""
+    try:
+        os.link(path, keep)
+    except OSError:
+        shutil.copy2(path, keep)
+
+
+def _put_back(done: list[Path], kept: dict[Path, Path], exc: BaseException) -> None:
+    """Undo the renames of ``done`` (in reverse); PartlyReplacedError (from ``exc``) if one cannot be undone."""
+    for path in reversed(done):
+        try:
+            if path in kept:
+                os.replace(kept[path], path)
+            else:
+                path.unlink()
+        except OSError as undo:
+            raise PartlyReplacedError(
+                getattr(exc, "errno", None) or undo.errno,
+                f"renaming the new files into place failed ({exc!r}), and putting the previous {path.name} back "
+                f"failed too ({undo})") from exc
+
+
+def _discard_staged(files, folders) -> None:
+    for tmp in files:
+        Path(tmp).unlink(missing_ok=True)
     for folder in folders:
         with contextlib.suppress(OSError):
             Path(folder).rmdir()

@@ -21,7 +21,8 @@ import numpy as np
 import pandas as pd
 
 from study.errors import NonFiniteError, ResultIntegrityError
-from study.integrity import commit_staged, data_rows, read_json, sha256_text, stage_files, verify_text
+from study.integrity import (PartlyReplacedError, data_rows, read_json, replace_together, sha256_text, stage_files,
+                             verify_text)
 
 Array = np.ndarray
 
@@ -148,8 +149,11 @@ class SimulationResult:
     def save(self, path: str | Path) -> Path:
         """Write ``<path>.csv`` and ``<path>.json`` as one; returns the CSV path.
 
-        Both files are written to temporary files first and only then renamed into place, so a failed
-        save (disk full, an interruption) replaces neither: a previous result there stays intact.
+        Both files are written to temporary files first, then renamed into place as one set
+        (:func:`study.integrity.replace_together`): if writing or a rename fails, or is interrupted, the files
+        already renamed get their previous content back, so a previous result there stays whole. Only if that,
+        too, fails is the pair left part new, part old; the JSON records the CSV's checksum, so such a pair is
+        refused when read, never used.
         """
         base = _base(path)
         base.parent.mkdir(parents=True, exist_ok=True)
@@ -165,17 +169,16 @@ class SimulationResult:
         })
         sidecar[JSON_CHECKSUM_KEY] = _json_checksum(sidecar)
         csv_path, json_path = _with(base, ".csv"), _with(base, ".json")
-        try:  # the JSON last: a result is saved once its JSON exists
-            staged = stage_files({csv_path: csv_text, json_path: json.dumps(sidecar, indent=1, sort_keys=True)})
+        try:
+            replace_together(stage_files({csv_path: csv_text,
+                                          json_path: json.dumps(sidecar, indent=1, sort_keys=True)}))
+        except PartlyReplacedError as exc:
+            raise OSError(exc.errno, f"{base}: result saved only in part: {exc.strerror}; {json_path.name} and "
+                                     f"{csv_path.name} do not match: the pair is refused when read, not "
+                                     f"reused") from exc
         except OSError as exc:
             raise OSError(exc.errno, f"{base}: result not saved, writing {csv_path.name} and {json_path.name} "
                                      f"failed ({exc}); no file was replaced, any previous result intact") from exc
-        try:
-            commit_staged(staged)
-        except OSError as exc:
-            raise OSError(exc.errno, f"{base}: result saved only in part, renaming its files failed ({exc}); "
-                                     f"{json_path.name} and {csv_path.name} may not match: it will be refused "
-                                     f"when read, not reused") from exc
         return csv_path
 
     @classmethod
@@ -248,6 +251,32 @@ class SimulationResult:
         energies = {n: df[f"energy:{n}"].to_numpy(dtype=float) for n in energy_names}
         forces = {n: df[f"force:{n}"].to_numpy(dtype=float) for n in force_names}
         return cls(t, q, qd, qdd, lam, phi, phidot, energies, forces, stats, meta)
+
+
+def check_save_target(path: str | Path, argument: str = "--out") -> None:
+    """ValueError unless saving a result at ``path`` would replace nothing but a saved result: ``path`` is not a
+    folder, and its ``.csv`` and ``.json`` are absent or the pair of a saved result (a JSON sidecar with its own
+    checksum). Writes nothing; a command calls it before any work."""
+    base = _base(path)
+    if base.is_dir():
+        raise ValueError(f"{argument} {path}: a folder; a result is saved as <name>.csv and <name>.json, so give a "
+                         f"file name (e.g. {base / 'run'})")
+    csv_path, json_path = _with(base, ".csv"), _with(base, ".json")
+    for p in (csv_path, json_path):
+        if p.exists() and not p.is_file():
+            raise ValueError(f"{argument} {path}: {p} is a folder, not a saved result; refused, nothing written")
+    if not json_path.exists():
+        if csv_path.exists():
+            raise ValueError(f"{argument} {path}: {csv_path} exists and is not a saved result (no {json_path.name} "
+                             f"beside it); refused, nothing written: give another name")
+        return
+    try:
+        side = _read_sidecar(base)[0]
+    except (ResultIntegrityError, OSError):
+        side = {}
+    if JSON_CHECKSUM_KEY not in side or not isinstance(side.get("csv"), dict):
+        raise ValueError(f"{argument} {path}: {json_path} exists and is not a saved result (not the JSON of a "
+                         f"saved result's pair); refused, nothing written: give another name")
 
 
 def _base(path: str | Path) -> Path:

@@ -19,7 +19,6 @@ slider or pin has friction the comparison with Exudyn is at the regularized law 
 from __future__ import annotations
 
 import math
-import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +29,10 @@ import pandas as pd
 
 from study.compare import common_samples, max_deviation, observed_orders
 from study.errors import SimulationError
+from study.errors import ResultIntegrityError
 from study.mechanisms import Mechanism
+from study.output_folder import claim_output_folder
+from study.pipeline.tables import forget_table, table_names, write_table
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.friction import PainleveError
@@ -213,16 +215,17 @@ def _reactions(mech: Mechanism, ref: SimulationResult, exudyn: dict) -> pd.DataF
 def validate(mech: Mechanism, settings: Settings, out: str | Path,
              say: Callable[[str], None] = print) -> dict[str, pd.DataFrame]:
     """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs
-    (``runs/``, ``tables/``, ``figures/``, emptied first, so nothing of an earlier validation is read back).
-    A failed run is a row of the tables with its error; the reference run must succeed."""
+    (``runs/``, ``tables/``, ``figures/``). ``out`` must be new, empty or a folder study made (its marker): a user's
+    folder is refused before any work. What an earlier validation wrote there is removed first, so nothing of it is
+    read back; nothing else is touched. A failed run is a row of the tables with its error; the reference run must
+    succeed."""
     from study.validation_plan import check_plan
-    from study.validation_report import order_lines, write_report
+    from study.validation_report import FIGURES, order_lines, write_report
 
     estimate = check_plan(mech, settings, _in_house_plan(mech, settings), len(EXUDYN_SOLVERS))
-    out = Path(out)
-    for folder in ("runs", "tables", "figures"):
-        shutil.rmtree(out / folder, ignore_errors=True)
-    (out / "runs").mkdir(parents=True)
+    out = claim_output_folder(Path(out))
+    _remove_previous(out, FIGURES)
+    (out / "runs").mkdir(exist_ok=True)
     t0 = time.perf_counter()
     say(f"validate {mech.name}: {mech.equations().n_coordinates} coordinates, "
         f"{mech.equations().n_constraints} constraint rows, t_end = {settings.t_end:g} s")
@@ -234,11 +237,28 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     for (solver, h), r in exudyn.items():
         r.save(out / "runs" / f"exudyn_{solver}_h{h:g}")
     result = tables(mech, settings, inhouse, exudyn, failed, inhouse_failed)
-    (out / "tables").mkdir(exist_ok=True)
+    command = f"python -m study validate {mech.parameters.path.with_suffix('.py')} --out {out}"
     for name, table in result.items():
-        table.to_csv(out / "tables" / f"{name}.csv", index=False)
+        write_table(out / "tables" / f"{name}.csv", table.to_csv(index=False), command)
     path = write_report(mech, settings, out)
     for line in order_lines(result["exudyn_orders"], mech.equations(), settings.friction_eps):
         say(line)
     say(f"wrote {path} ({time.perf_counter() - t0:.0f} s)")
     return result
+
+
+def _remove_previous(out: Path, figures: tuple[str, ...]) -> None:
+    """Remove what an earlier validation wrote into ``out``: its saved runs (result pairs that pass their check),
+    the tables its record lists, and its figures (by name). A user's files there are left alone."""
+    for side in sorted((out / "runs").glob("*.json")):
+        base = side.with_suffix("")
+        try:
+            SimulationResult.verify(base)
+        except (ResultIntegrityError, OSError):
+            continue
+        side.with_suffix(".csv").unlink(missing_ok=True)
+        side.unlink()
+    for name in table_names(out / "tables"):
+        forget_table(out / "tables" / name)
+    for stem in figures:
+        (out / "figures" / f"{stem}.png").unlink(missing_ok=True)

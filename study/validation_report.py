@@ -12,12 +12,14 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from study.mechanisms import Mechanism  # noqa: E402
+from study.pipeline.tables import read_table  # noqa: E402
 from study.reference_data import tolerance  # noqa: E402
 from study.report.render import fmt_number, frame_table  # noqa: E402
 from study.results import SimulationResult  # noqa: E402
 
 
 MAX_PANELS = 8   # coordinates drawn, one panel each
+FIGURES = ("trajectories", "constraint_violation", "exudyn_convergence")   # figures/<stem>.png, each drawn once
 
 
 def _figures(out: Path, convergence: pd.DataFrame, coordinates: list[str]) -> list[str]:
@@ -121,7 +123,7 @@ def order_lines(orders: pd.DataFrame, eom, friction_eps: float) -> list[str]:
 
 def write_report(mech: Mechanism, settings, out: Path) -> Path:
     """``out/report.md`` from ``out/tables`` and the figures drawn from ``out/runs``."""
-    t = {name: pd.read_csv(out / "tables" / f"{name}.csv", keep_default_na=False, na_values=[""])
+    t = {name: read_table(out / "tables" / f"{name}.csv", keep_default_na=False, na_values=[""])
          for name in ("initial_state", "in_house", "exudyn_convergence", "exudyn_orders", "reactions")}
     eom = mech.equations()
     figures = _figures(out, t["exudyn_convergence"], list(eom.coordinate_names))

@@ -41,8 +41,9 @@ import numpy as np
 import pandas as pd
 
 from study.locations import REFERENCE_DIR
-from study.pipeline import (CASES_DIR, Case, MissingResult, Store, load_case_lists, make_executor, run_cases,
-                            write_tables)
+from study.output_folder import check_output_folder, claim_output_folder, require_output_folder
+from study.pipeline import (CASES_DIR, Case, MissingResult, Store, check_tables, load_case_lists, make_executor,
+                            read_table, run_cases, write_tables)
 from study.pipeline.summaries import energy_flags
 
 RULES_PATH = REFERENCE_DIR / "verify.toml"
@@ -212,8 +213,9 @@ def compare_folders(old_dir: Path, new_dir: Path, names: Iterable[str] | None = 
 
 
 def _read(path: Path) -> pd.DataFrame:
-    # keep strings as written ('1e-4' labels stay strings only if pandas cannot parse them: same on both sides)
-    return pd.read_csv(path, keep_default_na=True)
+    """A table checked against its record (:func:`study.pipeline.read_table`); strings kept as written ('1e-4'
+    labels stay strings only if pandas cannot parse them: same on both sides)."""
+    return read_table(path, keep_default_na=True)
 
 
 def worst_per_table(comparison: pd.DataFrame) -> pd.DataFrame:
@@ -239,6 +241,7 @@ def regenerate(out_dir: Path, cache_root: Path, studies: Sequence[str] | None = 
     from study.initial_report import write_initial_conditions
     from study.pipeline import run_pipeline
 
+    claim_output_folder(out_dir)
     tables = Path(out_dir) / "tables"
     if studies is None:
         write_initial_conditions(tables)
@@ -326,7 +329,8 @@ def perturbation_check(reports_dir: Path, cache_root: Path, studies: Sequence[st
                     parts.append(part)
     full = pd.concat(parts, ignore_index=True)
     result = full.drop(columns=["worst_row", "note"])
-    write_tables({"perturbation_check": result}, reports_dir)
+    claim_output_folder(reports_dir)
+    write_tables({"perturbation_check": result}, reports_dir, f"python -m study verify --perturb --out {reports_dir}")
     _print(worst_per_table(result), full, f"perturbation check ({', '.join(f'{k:+d}' for k in ulps)} ulps)",
            sys.stdout)
     return bool(result["passed"].all()), result
@@ -352,8 +356,13 @@ def main_verify(reports_dir: Path, cache_root: Path, studies: Sequence[str] | No
                 perturb: bool, ulps: Sequence[int] | None, cases_dir: Path = CASES_DIR) -> int:
     """``python -m study verify``: 0 if every compared column is within its rule, 1 otherwise."""
     if perturb:
+        check_output_folder(reports_dir)   # before any run: it writes tables/perturbation_check.csv there
         ok, _ = perturbation_check(reports_dir, cache_root, studies, tuple(ulps or DEFAULT_ULPS), workers, cases_dir)
         return 0 if ok else 1
+    require_output_folder(reports_dir)   # the snapshot: a report folder study wrote, every table as recorded
+    if not (Path(reports_dir) / "tables").is_dir():
+        raise ValueError(f"--out {reports_dir}: no tables/ folder, so no snapshot to compare with")
+    check_tables(Path(reports_dir) / "tables")
     with tempfile.TemporaryDirectory(prefix="snapshot-") as tmp:
         snapshot = copy_snapshot(Path(reports_dir) / "tables", Path(tmp) / "tables")
         ok, _ = verify_tables(snapshot, cache_root, studies, workers, cases_dir)

@@ -14,6 +14,7 @@ from study.bench.accuracy import cheapest, ratios
 from study.bench.harness import repeats_for
 from study.bench.sweeps import order2_step
 from study.bench.targets import THRESHOLDS, evaluate_targets
+from study.pipeline.tables import record_written
 from study.report.context import ReportContext
 from study.report.render import fmt_number
 from study.report.sections import benchmarks
@@ -148,6 +149,8 @@ def _write(folder, targets):
     (folder / "machine.json").write_text(json.dumps({"platform": "Linux-test", "cpu_count": 2, "python": "3.11.7",
                                                      "exudyn": "1.13.6", "numba": "0.68.1", "repeats": 5,
                                                      "benchmark_wall_s": 431.5, "long_run_s": 5.0}))
+    for path in folder.glob("*.csv"):   # recorded as the one table writer records them
+        record_written(path, "written by the test")
 
 
 def test_section_renders_saved_numbers(tmp_path):
@@ -171,6 +174,7 @@ def test_section_renders_saved_numbers(tmp_path):
 
     missed = _targets(accel=_accel(us_loop=7.5))
     missed.to_csv(tmp_path / "benchmarks" / "targets.csv", index=False)
+    record_written(tmp_path / "benchmarks" / "targets.csv", "written by the test")
     text = "\n".join(benchmarks.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "| 7.5 | µs | **missed** |" in text and "1 of 7 target rows missed" in text
     assert "| reported |" in text

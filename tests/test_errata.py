@@ -363,10 +363,10 @@ def test_update_errata_reuses_only_tables_written_from_the_same_inputs(tmp_path,
 
     def fake_write(out_dir):
         calls.append(out_dir)
-        out_dir.mkdir(parents=True, exist_ok=True)
-        (out_dir / "errata.csv").write_text("formula,verdict\nx,exact\n")
-        (out_dir / "errata.md").write_text("# errata\n")
-        return out_dir / "errata.md"
+        from study.pipeline.tables import write_table   # the writer write_errata uses: each file recorded
+
+        write_table(out_dir / "errata.csv", "formula,verdict\nx,exact\n", "python -m study errata")
+        return write_table(out_dir / "errata.md", "# errata\n", "python -m study errata")
 
     monkeypatch.setattr(table, "write_errata", fake_write)
     monkeypatch.setattr(table, "inputs_key", lambda: "key-1")

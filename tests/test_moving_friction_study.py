@@ -129,7 +129,7 @@ backend = "compiled"
 
 
 def test_the_pipeline_records_the_flag_and_run_and_verify_fail_on_it(tmp_path, monkeypatch):
-    from study import cli, verify
+    from study import cli, cli_pipeline, verify
     from study.pipeline import run_pipeline
 
     folder = tmp_path / "cases"
@@ -161,7 +161,7 @@ def test_the_pipeline_records_the_flag_and_run_and_verify_fail_on_it(tmp_path, m
     assert not ok and "FAILED energy balance" in stream.getvalue()
     monkeypatch.setattr("study.model.compile.cache_dir", lambda: cache)
     args = cli.build_parser().parse_args(["run", "--cases", str(folder), "--out", str(out), "--workers", "1"])
-    assert cli._run(args) == 1
+    assert cli_pipeline.run(args) == 1
 
 
 # --- the exact law: backends, dead centres, the static limit -------------------------------------------------
@@ -262,7 +262,7 @@ def test_summary_and_section_on_a_short_horizon(tmp_path):
     assert (orders >= tolerance("min_order", table="cross_validation")).all(), orders
     assert tables["moving_friction_eps"]["shrinking"].all()
     reports = tmp_path / "reports"
-    write_tables(tables, reports)
+    write_tables(tables, reports, "python -m study run moving_friction")
     cl = dataclasses.replace(case_list(), cases=tuple(cases))
     ctx = ReportContext(reports, store, {"moving_friction": cl})
     from study.report.sections import moving_friction as section

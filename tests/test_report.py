@@ -15,6 +15,7 @@ from study.report import build_report
 from study import errata
 from study.errata.table import errata_markdown
 from study.report.render import markdown_to_html, md_math, md_table, number_figures
+from study.pipeline.tables import record_written
 from tiny_cases import TINY
 
 
@@ -27,11 +28,20 @@ def saved(tmp_path_factory):
     (cases / "sliding_mode.toml").write_text(TINY)
     reports, cache = root / "reports", root / "cache"
     pl.run_pipeline(reports, cache, workers=1, folder=cases, stream=open(os.devnull, "w"))
-    pd.DataFrame({"mechanism": ["quick_return"], "max_abs_phi_printed": [0.000149101776],
-                  "max_abs_phi_consistent": [1e-16], "max_abs_phidot_printed": [2e-5],
-                  "max_abs_phidot_consistent": [3e-16]}).to_csv(reports / "tables" / "initial_conditions.csv",
-                                                                 index=False)
+    write(reports / "tables" / "initial_conditions.csv",
+          pd.DataFrame({"mechanism": ["quick_return"], "max_abs_phi_printed": [0.000149101776],
+                        "max_abs_phi_consistent": [1e-16], "max_abs_phidot_printed": [2e-5],
+                        "max_abs_phidot_consistent": [3e-16]}))
     return reports, cache, cases
+
+
+def write(path, table):
+    """A table made by a test, written by the one table writer (recorded beside it, as the report requires)."""
+    from study.output_folder import claim_output_folder
+
+    claim_output_folder(Path(path).parents[1])   # the report folder, as a command would have made it
+    text = table if isinstance(table, str) else table.to_csv(index=False)
+    pl.write_table(path, text, "written by the test")
 
 
 def _row(markdown, first_cells):
@@ -90,10 +100,9 @@ def test_report_from_saved_runs(saved):
 
 def test_report_embeds_errata_and_lists_failed_cases(saved, tmp_path):
     reports, cache, cases = saved
-    (reports / "tables" / "errata.md").write_text("# Errata\n\n| formula | verdict |\n|---|---|\n"
-                                                   "| `a\\|b` | wrong |\n")
-    pd.DataFrame([{"study": "sliding_mode", "case": "sliding_mode/runs [x]", "key": "k",
-                   "error": "ValueError: boom"}]).to_csv(reports / "tables" / "failed_cases.csv", index=False)
+    write(reports / "tables" / "errata.md", "# Errata\n\n| formula | verdict |\n|---|---|\n| `a\\|b` | wrong |\n")
+    write(reports / "tables" / "failed_cases.csv",
+          pd.DataFrame([{"study": "sliding_mode", "case": "sliding_mode/runs [x]", "key": "k", "error": "ValueError: boom"}]))
     text = build_report(reports, cache, cases).read_text()
     assert "### Errata" in text and "| `a\\|b` | wrong |" in text
     assert "<code>a|b</code>" in (reports / "report.html").read_text()
@@ -115,9 +124,12 @@ def test_report_outputs_are_written_atomically(tmp_path, saved, monkeypatch):
     import study.report as report
     from study.integrity import atomic_write
 
+    import study.pipeline.tables as tables
+
     written = []
-    monkeypatch.setattr(report, "atomic_write",
-                        lambda path, text: written.append(Path(path).name) or atomic_write(path, text))
+    for module in (report, tables):   # the report's own files, and its timing table through the table writer
+        monkeypatch.setattr(module, "atomic_write",
+                            lambda path, text: written.append(Path(path).name) or atomic_write(path, text))
     out = tmp_path / "reports"
     build_report(out, tmp_path / "empty_cache", saved[2])
     assert {"index.md", "report.html", "manifest.json", "report_timing.csv"} <= set(written)
@@ -171,7 +183,7 @@ def test_report_html_typesets_the_errata(saved, tmp_path):
                            "printed": r"a_{22} = m_2 c_2 l_1 + m_3 l_2^2 + J_2", "derived": "J2 + c2**2*m2 + l2**2*m3",
                            "derived_latex": r"J_{2} + {\color{crimson}c_{2}^{2} m_{2}} + l_{2}^{2} m_{3}",
                            "difference_latex": r"c_{2} m_{2} \left(- c_{2} + l_{1}\right)", "note": "m2*c2 |x|"}])
-    (reports / "tables" / "errata.md").write_text(errata_markdown(frame))
+    write(reports / "tables" / "errata.md", errata_markdown(frame))
     build_report(reports, cache, cases)
     html = (reports / "report.html").read_text()
     section = html[html.index('<h2 id="errata">'):html.index("<h2", html.index('<h2 id="errata">') + 5)]
@@ -184,11 +196,9 @@ def test_report_html_typesets_the_errata(saved, tmp_path):
 def test_claims_verdicts_follow_the_tables(tmp_path, saved):
     """Each claim's verdict is computed from its table: change the table, the verdict changes."""
     reports = tmp_path / "reports"
-    (reports / "tables").mkdir(parents=True)
-    pd.DataFrame({"mechanism": ["slider_crank", "quick_return"], "max_abs_phi_printed": [5.204, 1.5e-4]}).to_csv(
-        reports / "tables" / "initial_conditions.csv", index=False)
-    pd.DataFrame({"paper": [0, 0, 1], "verdict": ["exact", "wrong", "exact"]}).to_csv(
-        reports / "tables" / "errata.csv", index=False)
+    write(reports / "tables" / "initial_conditions.csv",
+          pd.DataFrame({"mechanism": ["slider_crank", "quick_return"], "max_abs_phi_printed": [5.204, 1.5e-4]}))
+    write(reports / "tables" / "errata.csv", pd.DataFrame({"paper": [0, 0, 1], "verdict": ["exact", "wrong", "exact"]}))
     text = build_report(reports, tmp_path / "no_cache", saved[2]).read_text()
     claims = text[text.index("## Claims of the papers"):text.index("## Initial conditions")]
     assert "| 000 | the printed equations of motion are correct | fails (1 wrong) |" in claims
@@ -256,6 +266,7 @@ def test_backends_section_lists_every_pair_that_does_not_agree(tmp_path):
                   "t_end": [20.0, 20.0, 5.0], "max_abs_dq": [5.77e-5, 1e-9, 2e-13], "bound": [4.44e-5, 4.4e-6, 5e-8],
                   "rule": [rule, rule, "fast_fixed_step_agreement * max|q|"], "agree": [False, True, True]}
                  ).to_csv(tables / "backend_agreement.csv", index=False)
+    record_written(tables / "backend_agreement.csv", "written by the test")   # as the one table writer would
     text = "\n".join(backends.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "**2 of 3 sampled pairs agree**" in text and "slider_crank 1 of 2, work_precision 1 of 1" in text
     assert "| slider_crank | slider_crank/eps_sweep [eps=1e-2] | 5.77e-05 | 4.44e-05 | 1.3 |" in text
@@ -279,6 +290,7 @@ def test_benchmark_overview_judges_every_run_by_its_source_verdict(tmp_path):
 
     def save(folder, name, frame):
         pd.DataFrame(frame).to_csv(folder / f"{name}.csv", index=False)
+        record_written(folder / f"{name}.csv", "written by the test")   # as the one table writer would
 
     save(tables, "a01_runs", {"engine": ["inhouse", "inhouse", "exudyn"], "method": ["none", "none", "exudyn"],
                               "setting": ["DOP853 rtol=1e-08", "DOP853 rtol=1e-06", "index3 h=0.001"],

@@ -25,13 +25,11 @@ STUDY = Path(__file__).resolve().parents[1] / "study"
 
 #: "<path under study/>" (a module, its lines) or "<path under study/>::<qualified name>" (a function, its lines)
 KNOWN = {
-    "cli.py": 461,
     "cli.py::build_parser": 113,
     "fast/dynamics.py::_friction": 103,
     "fast/loop.py::integrate_segment": 156,
     "model/compile.py::compile_description": 84,
     "params.py::parse_parameters": 104,
-    "pipeline/orchestrate.py::run_pipeline": 81,
     "simulate.py::simulate": 210,
     "solver/integrate.py::integrate": 163,
 }

@@ -66,7 +66,7 @@ def check_tables(tables, expected_columns):
 
 def render(study, cases, store, tables, tmp_path):
     reports = tmp_path / "reports"
-    write_tables(tables, reports)
+    write_tables(tables, reports, f"python -m study run {study}")
     ctx = ReportContext(reports, store, {study: dataclasses.replace(case_list(study), cases=tuple(cases))})
     lines = importlib.import_module(f"study.report.sections.{study}").section(ctx)
     assert lines[0].startswith("## ")

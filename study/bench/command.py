@@ -34,6 +34,8 @@ from study.bench.summary import summarize
 from study.bench.sweeps import sweep
 from study.bench.targets import evaluate_targets
 from study.integrity import atomic_write
+from study.output_folder import claim_output_folder
+from study.pipeline.tables import read_table, write_table
 from study.simulate import simulate
 
 
@@ -66,8 +68,9 @@ def _merge(new: pd.DataFrame, old: pd.DataFrame | None, mechanisms: list[str]) -
 
 
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
-    """A table of the benchmark, written atomically (pandas' default CSV format)."""
-    atomic_write(path, frame.to_csv(index=False, lineterminator="\n"))
+    """A table of the benchmark (pandas' default CSV format), written and recorded by the one table writer."""
+    out = "" if Path(path).parent.resolve() == OUT.resolve() else f" --out {Path(path).parent}"
+    write_table(path, frame.to_csv(index=False, lineterminator="\n"), f"python -m study bench{out}")
 
 
 def main(argv=None) -> int:
@@ -205,8 +208,7 @@ def run(args: argparse.Namespace) -> int:
     earlier full run in the same folder), so ``targets.csv`` is always evaluated from every table.
     """
     only, mechs = _selection(args)
-    out = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out = claim_output_folder(args.out)
     if args.remeasure:
         shutil.rmtree(bench_store().root, ignore_errors=True)
 
@@ -214,7 +216,7 @@ def run(args: argparse.Namespace) -> int:
         path = out / name
         if not path.exists():
             raise FileNotFoundError(f"{path} is missing: run the section that writes it (without --only) first")
-        return pd.read_csv(path)
+        return read_table(path)
 
     def kept(name):   # the saved table whose other mechanisms' rows a --mechanisms run keeps
         return saved(name) if args.mechanisms else None

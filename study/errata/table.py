@@ -77,13 +77,13 @@ def write_errata(out_dir: Path) -> Path:
     pathlib.Path
         The path of ``errata.md``; ``errata.csv`` is next to it.
     """
+    from study.pipeline.tables import write_table
+
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     df = errata_table()
-    atomic_write(out_dir / "errata.csv", df.to_csv(index=False, lineterminator="\n"))
-    md = out_dir / "errata.md"
-    atomic_write(md, errata_markdown(df))
-    return md
+    command = f"python -m study errata --out {out_dir.parent}"
+    write_table(out_dir / "errata.csv", df.to_csv(index=False, lineterminator="\n"), command)
+    return write_table(out_dir / "errata.md", errata_markdown(df), command)
 
 
 def inputs_key() -> str:
@@ -110,8 +110,10 @@ def update_errata(out_dir: Path, cache_root: Path) -> tuple[Path, bool]:
         record = json.loads(record_path.read_text())
     except (OSError, ValueError):
         record = {}
+    from study.pipeline.tables import recorded
+
     if record.get("key") == key and record.get("out") == str(out_dir.resolve()) and all(
-            f.exists() and record.get("files", {}).get(f.name) == sha256_file(f) for f in files):
+            f.exists() and record.get("files", {}).get(f.name) == sha256_file(f) and recorded(f) for f in files):
         return files[1], True
     md = write_errata(out_dir)
     record_path.parent.mkdir(parents=True, exist_ok=True)

@@ -32,7 +32,9 @@ from typing import Iterable
 import pandas as pd
 
 from study.integrity import atomic_write
-from study.pipeline import CASES_DIR, PIPELINE_RECORD, CaseList, CaseListError, Store, load_case_lists
+from study.output_folder import check_output_folder, claim_output_folder
+from study.pipeline import (CASES_DIR, PIPELINE_RECORD, CaseList, CaseListError, Store, check_tables, load_case_lists,
+                            read_table, write_table)
 from study.report.context import ReportContext, default_render_workers
 from study.report.sections import findings
 from study.report.render import markdown_to_html, md_table, number_figures, png_data_uri
@@ -43,6 +45,8 @@ __all__ = ["FIXED_SECTIONS", "build_report", "report_sections"]
 # The sections that no case list names (modules of study.report.sections), with their place in the
 # report. Every other section is named by a case list ([study] section, section_order), so a new
 # study is a case list plus a section module.
+# The folders of tables a report reads, each checked against its record (checksums.json) before any work.
+TABLE_FOLDERS = ("tables", "timing", "benchmarks")
 FIXED_SECTIONS = {"claims": 10.0, "initial": 20.0, "errata": 30.0, "benchmarks": 90.0, "backends": 105.0,
                   "energy_balance": 107.0, "reproducibility": 110.0}
 
@@ -87,7 +91,7 @@ def _other_tables_section(tables_dir: Path, shown: set[str]) -> list[str]:
         return lines + [f"No tables found in `{tables_dir.name}/`.", ""]
     rows = []
     for path in files:
-        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+        frame = read_table(path, dtype=str, keep_default_na=False)
         rows.append([f"[`tables/{path.name}`](tables/{path.name})", str(len(frame)), str(len(frame.columns)),
                      "above" if path.name in shown else "linked only"])
     return lines + [md_table(["file", "rows", "columns", "shown"], rows, [False, True, True, False]), ""]
@@ -146,8 +150,10 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     cases_dir : the folder of case lists (default ``reference/cases``).
     """
     reports_dir, cache_dir = Path(reports_dir), Path(cache_dir)
-    if reports_dir.exists() and not reports_dir.is_dir():
-        raise ValueError(f"reports_dir = {reports_dir} exists and is not a folder")
+    check_output_folder(reports_dir)   # a user's own folder is refused, and every table checked, before any work
+    for folder in TABLE_FOLDERS:
+        check_tables(reports_dir / folder)
+    claim_output_folder(reports_dir)
     root = reports_dir.resolve().parent
     store = Store(cache_dir / "runs")
     case_lists = {cl.study: cl for cl in load_case_lists(cases_dir)}
@@ -174,13 +180,10 @@ def build_report(reports_dir: Path, cache_dir: Path, cases_dir: Path = CASES_DIR
     timing = pd.DataFrame([{"stage": k, "wall_s": v} for k, v in stages.items()] +
                           [{"stage": f"figures {k}", "wall_s": float(v)} for k, v in ctx.figure_stats.items()] +
                           [{"stage": "figure render workers", "wall_s": float(ctx.render_workers)}])
-    (reports_dir / "timing").mkdir(parents=True, exist_ok=True)
-    atomic_write(reports_dir / "timing" / "report_timing.csv", timing.to_csv(index=False, lineterminator="\n"))
-
+    write_table(reports_dir / "timing" / "report_timing.csv", timing.to_csv(index=False, lineterminator="\n"),
+                f"python -m study report --out {reports_dir}")
+    ctx.remove_stale_figures()
     written = {p.name for p in ctx.figures_written} | {p.with_suffix(".svg").name for p in ctx.figures_written}
-    for stale in sorted(figures_dir.iterdir()):
-        if stale.suffix in (".png", ".svg") and stale.name not in written:
-            stale.unlink()
 
     record_path = cache_dir / PIPELINE_RECORD
     record = json.loads(record_path.read_text()) if record_path.exists() else {}

@@ -20,7 +20,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from study.integrity import atomic_write
-from study.pipeline import Case, CaseList, Store, find
+from study.errors import ResultIntegrityError
+from study.pipeline import Case, CaseList, Store, find, read_table
 from study.report.figures import save_figure
 from study.results import SimulationResult
 
@@ -56,10 +57,18 @@ class ReportContext:
         return find(self.case_lists[study].cases, **criteria)
 
     def has(self, case: Case) -> bool:
-        return self.store.has(case)
+        """Whether the case has a saved result. One that fails its check (edited, cut) stops the report: a figure
+        is never drawn without it in silence. ResultIntegrityError names the file and the command that rebuilds it."""
+        why = self.store.problem(case)
+        if why not in (None, "not saved"):
+            raise ResultIntegrityError(f"{why}; the saved run of case {case.name} fails its check: rebuild it with "
+                                       f"`python -m study run {case.study}`")
+        return why is None
 
     def load(self, case: Case) -> SimulationResult:
-        """The saved result of a case (LookupError if it is missing or failed)."""
+        """The saved result of a case (LookupError if it is missing or failed; ResultIntegrityError, as
+        :meth:`has`, if it fails its check)."""
+        self.has(case)
         result = self.store.load(case)
         self.inputs += [self.store.file(case, ".csv"), self.store.file(case, ".json")]
         return result
@@ -71,11 +80,17 @@ class ReportContext:
         the saved digits.
         """
         folder = "timing" if name.endswith("_timing") else "tables"
-        path = self.reports_dir / folder / f"{name}.csv"
-        if not path.exists():
-            return None
-        self.inputs.append(path)
-        return pd.read_csv(path, dtype=str, keep_default_na=False) if as_text else pd.read_csv(path)
+        return self.read(f"{folder}/{name}.csv", **({"dtype": str, "keep_default_na": False} if as_text else {}))
+
+    def read(self, relative: str, **read_csv) -> pd.DataFrame | None:
+        """A table of the report folder (``tables/<name>.csv``, ``benchmarks/<name>.csv`` ...) through the one checked
+        reader (:func:`study.pipeline.read_table`), or None if it is neither there nor recorded (its study did not
+        run). A table that fails its check, or that its record lists and is gone, stops the report."""
+        path = self.reports_dir / relative
+        frame = read_table(path, missing_ok=True, **read_csv)
+        if frame is not None:
+            self.inputs.append(path)
+        return frame
 
     def figure(self, fig: Figure, stem: str, alt: str) -> str:
         """Save ``fig`` as ``figures/<stem>.png`` and ``.svg``; returns the Markdown image line.
@@ -128,6 +143,21 @@ class ReportContext:
                 self._pool = None
             folder = self.reports_dir / "figures"
             folder.mkdir(parents=True, exist_ok=True)
+            atomic_write(folder / FIGURE_KEYS, json.dumps(dict(sorted(keys.items())), indent=1) + "\n")
+
+
+    def remove_stale_figures(self) -> None:
+        """Remove the figures an earlier report rendered (listed in ``figures/figure_keys.json``) that this one did
+        not write; nothing else in ``figures/`` is touched."""
+        keys = self._figure_keys()
+        folder = self.reports_dir / "figures"
+        now = {p.stem for p in self.figures_written}
+        stale = sorted(set(keys) - now)
+        for stem in stale:
+            for suffix in (".png", ".svg"):
+                (folder / f"{stem}{suffix}").unlink(missing_ok=True)
+            keys.pop(stem)
+        if stale:
             atomic_write(folder / FIGURE_KEYS, json.dumps(dict(sorted(keys.items())), indent=1) + "\n")
 
 

@@ -28,12 +28,13 @@ import time
 import numpy as np
 import pandas as pd
 
-from study.integrity import atomic_write
 from study.locations import REPORTS_DIR
+from study.pipeline.tables import write_table
 from study.simulate import one_blas_thread
 
 VARIANTS = (("seed", 2.0), ("n5", 2.0), ("n10", 2.0), ("n20", 1.0), ("n40", 1.0))
 OUT = REPORTS_DIR / "tables" / "singular_four_bar_scaling.csv"
+SCALING_COMMAND = "python -m study.studies.n_four_bar_scaling"   # what rebuilds OUT (recorded beside it)
 
 
 @one_blas_thread
@@ -92,8 +93,7 @@ def main() -> int:
                               check=True)
         rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
         print(f"  {rows[-1]}", file=sys.stderr, flush=True)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(OUT, pd.DataFrame(rows).to_csv(index=False, lineterminator="\n"))
+    write_table(OUT, pd.DataFrame(rows).to_csv(index=False, lineterminator="\n"), SCALING_COMMAND)
     print(f"wrote {OUT}", file=sys.stderr)
     return 0
 

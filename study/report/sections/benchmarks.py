@@ -27,11 +27,7 @@ FOLDER = "benchmarks"
 
 def _read(ctx: ReportContext, name: str) -> pd.DataFrame | None:
     """``reports/benchmarks/<name>`` as a frame (registered in ``ctx.inputs``), or None if absent."""
-    path = ctx.reports_dir / FOLDER / name
-    if not path.exists():
-        return None
-    ctx.inputs.append(path)
-    return pd.read_csv(path)
+    return ctx.read(f"{FOLDER}/{name}")
 
 
 def _machine(ctx: ReportContext) -> dict:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from study.pipeline import recorded, verified_text
 from study.report.context import ReportContext
 from study.report.render import demote_headings
 
@@ -10,11 +11,12 @@ def section(ctx: ReportContext) -> list[str]:
     lines = ["## Errata", ""]
     tables = ctx.reports_dir / "tables"
     md, csv = tables / "errata.md", tables / "errata.csv"
-    if md.exists():
+    if md.exists() or recorded(md):   # checked against its record: an edited or vanished table stops the report
+        text = verified_text(md)
         ctx.inputs.append(md)
         lines += ["Embedded from [`tables/errata.md`](tables/errata.md)"
                   + (" (same rows as [`tables/errata.csv`](tables/errata.csv))." if csv.exists() else "."), ""]
-        lines += [demote_headings(md.read_text(encoding="utf-8").strip(), 2), ""]
+        lines += [demote_headings(text.strip(), 2), ""]
     elif csv.exists():
         lines += ["`tables/errata.md` is missing; the table exists as [`tables/errata.csv`](tables/errata.csv).", ""]
     else:
