@@ -75,7 +75,7 @@ def required_parameters(mechanism: str) -> tuple[str, ...]:
     return tuple(getattr(importlib.import_module(f"study.mechanisms.{mechanism}"), "PARAMETERS", ()))
 
 
-def _values_class(mechanism: str, names: list[str]) -> type:
+def values_class(mechanism: str, names: list[str]) -> type:
     """A frozen dataclass holding one mechanism's parameter values (``ps.values.<name>``)."""
     return dataclasses.make_dataclass(f"{mechanism.title().replace('_', '')}Parameters",
                                       [(n, Any) for n in names], frozen=True)
@@ -338,7 +338,7 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     return ParameterSet(
         mechanism=mechanism,
         variant=variant,
-        values=_values_class(mechanism, list(values))(**values),
+        values=values_class(mechanism, list(values))(**values),
         units=MappingProxyType(units),
         sources=MappingProxyType(sources),
         initial=initial,

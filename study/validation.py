@@ -237,7 +237,8 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     for (solver, h), r in exudyn.items():
         r.save(out / "runs" / f"exudyn_{solver}_h{h:g}")
     result = tables(mech, settings, inhouse, exudyn, failed, inhouse_failed)
-    command = f"python -m study validate {mech.parameters.path.with_suffix('.py')} --out {out}"
+    command = (f"python -m study validate {mech.parameters.path.with_suffix('.py')} --out {out}"
+               if mech.parameters.path.suffix == ".toml" else f"study.validate({mech.name}, ..., out='{out}') again")
     for name, table in result.items():
         write_table(out / "tables" / f"{name}.csv", table.to_csv(index=False), command)
     path = write_report(mech, settings, out)

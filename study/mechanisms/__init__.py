@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from types import ModuleType
+from typing import Mapping
 
 import numpy as np
 import sympy as sp
@@ -23,6 +24,7 @@ from study.model.builder import MechanismBuilder
 from study.model.compile import compile_description
 from study.model.coordinates import COORDINATE_SETS, lower
 from study.model.joints import Description
+from study.inline_parameters import inline_parameters
 from study.params import ParameterSet, available_mechanisms, load_parameters
 from study.user_mechanism import load_parts
 from study.solver.initial import ConsistentState, InitialConditionError, consistent_initial_conditions
@@ -79,18 +81,34 @@ def equations_of(d: Description, coordinates: str = "relative", parameter_hash: 
 class Mechanism:
     """A description with its parameter set: what the engines take (the in-house paths, the Exudyn translator).
 
-    A user builds one from their own description and parameter file (``Mechanism(describe(ps), ps)``); the
-    study's mechanisms come from :func:`mechanism`. ``guess``: Newton's start for q(0) (default: the parameter
-    file's printed q(0)). The equations are derived once per coordinate set and kept.
+    A user builds one from a description alone, its parameter values being the description's own and the initial
+    state given by coordinate name (``Mechanism(d, q0={"th": 1.0}, qd0={"th": 0.0})``: the named coordinates are
+    independent, the others solved from the constraints; :mod:`study.inline_parameters`), or from a description
+    and a parameter file with provenance (``Mechanism(describe(ps), ps)``); the study's mechanisms come from
+    :func:`mechanism`. ``guess``: Newton's start for q(0) (default: the parameter set's printed q(0), or q0 and
+    zeros). The equations are derived once per coordinate set and kept.
     """
 
     description: Description
-    parameters: ParameterSet
+    parameters: ParameterSet | None = None
     guess: np.ndarray | None = None
     _equations: dict = field(default_factory=dict, repr=False)
+    q0: InitVar[Mapping[str, float] | None] = None
+    qd0: InitVar[Mapping[str, float] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, q0, qd0) -> None:
+        if not isinstance(self.description, Description):
+            raise TypeError(f"Mechanism(description=...) takes a study.Description, got {type(self.description).__name__}")
         self.description.validate()
+        if self.parameters is None:
+            if q0 is None:
+                raise ValueError(f"Mechanism({self.description.name}): give the initial state by coordinate name, "
+                                 f"q0={{...}} (and qd0), or a parameter set")
+            d = self.description
+            object.__setattr__(self, "parameters", inline_parameters(d.name, d.values, d.coordinate_names, q0, qd0))
+        elif q0 is not None or qd0 is not None:
+            raise ValueError(f"Mechanism({self.description.name}): q0/qd0 and a parameter set both give the initial "
+                             f"state; the parameter set's is in its [initial_conditions]: give one of them")
 
     @property
     def name(self) -> str:
