@@ -1,6 +1,8 @@
 """Exudyn (generated from the descriptions) against the in-house high-accuracy reference (DOP853,
 rtol 1e-12, projection, located switches)."""
 
+from functools import lru_cache
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,7 @@ def tol(key):
     return tolerance(key, table="cross_validation")
 
 
+@lru_cache(maxsize=None)   # one reference for both Exudyn solvers
 def reference(mechanism, variant, t_end):
     return simulate(mechanism, variant=variant, t_end=t_end, method="projection", integrator="DOP853",
                     rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"), output_step=OUTPUT_STEP)
