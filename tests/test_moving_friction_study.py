@@ -139,7 +139,10 @@ def test_the_pipeline_records_the_flag_and_run_and_verify_fail_on_it(tmp_path, m
     record = run_pipeline(out, cache, workers=1, folder=folder, stream=io.StringIO())
     table = pd.read_csv(out / "tables" / "energy_balance.csv")
     assert len(table) == 1 and not table["flagged"].iloc[0] and record["energy_balance_flags"] == {}
-    ok, _ = verify.verify_tables(out / "tables", cache, workers=1, cases_dir=folder, stream=io.StringIO())
+    # the tiny study only: the snapshot holds no errata or initial-conditions table, so regenerating those (a
+    # minute of sympy) would be compared with nothing
+    ok, _ = verify.verify_tables(out / "tables", cache, studies=["tiny"], workers=1, cases_dir=folder,
+                                 stream=io.StringIO())
     assert ok
 
     load = Store.load
@@ -157,7 +160,7 @@ def test_the_pipeline_records_the_flag_and_run_and_verify_fail_on_it(tmp_path, m
     assert f"ENERGY BALANCE of {name}" in stream.getvalue()
     assert bool(pd.read_csv(out / "tables" / "energy_balance.csv")["flagged"].iloc[0])
     stream = io.StringIO()
-    ok, _ = verify.verify_tables(out / "tables", cache, workers=1, cases_dir=folder, stream=stream)
+    ok, _ = verify.verify_tables(out / "tables", cache, studies=["tiny"], workers=1, cases_dir=folder, stream=stream)
     assert not ok and "FAILED energy balance" in stream.getvalue()
     monkeypatch.setattr("study.model.compile.cache_dir", lambda: cache)
     args = cli.build_parser().parse_args(["run", "--cases", str(folder), "--out", str(out), "--workers", "1"])

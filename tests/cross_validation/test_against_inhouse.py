@@ -1,32 +1,35 @@
 """Exudyn (generated from the descriptions) against the in-house high-accuracy reference (DOP853,
-rtol 1e-12, projection, located switches)."""
+rtol 1e-12, projection, located switches). The mechanisms here have no friction; their Exudyn runs (friction
+'none') are shared with test_reactions.py (frictionless_runs.py)."""
+
+from functools import lru_cache
 
 import numpy as np
 import pytest
 
-from study.exudyn_models import run as exudyn_run
+from cross_validation.frictionless_runs import FINE_STEP, frictionless_run
 from study.params import load_parameters
 from study.reference_data import tolerance
 from study.simulate import simulate
 
-OUTPUT_STEP = 0.005  # common sampling of both codes [s]; a multiple of every Exudyn step used
+OUTPUT_STEP = FINE_STEP  # common sampling of both codes [s]; a multiple of every Exudyn step used
 
 
 def tol(key):
     return tolerance(key, table="cross_validation")
 
 
+@lru_cache(maxsize=None)   # one reference for both Exudyn solvers
 def reference(mechanism, variant, t_end):
     return simulate(mechanism, variant=variant, t_end=t_end, method="projection", integrator="DOP853",
                     rtol=tolerance("reference_rtol"), atol=tolerance("reference_atol"), output_step=OUTPUT_STEP)
 
 
 def errors(mechanism, variant, t_end, solver, steps):
-    ps = load_parameters(mechanism, variant)
     ref = reference(mechanism, variant, t_end)
     rows = []
     for h in steps:
-        r = exudyn_run(ps, t_end, h, solver=solver, output_step=OUTPUT_STEP)
+        r = frictionless_run(mechanism, variant, t_end, h, solver, OUTPUT_STEP)
         rows.append({
             "h": h,
             "dq": np.abs(r.q - ref.q).max(),
