@@ -25,7 +25,7 @@ from numba.core.typing.typeof import typeof_impl
 from numba.experimental.function_type import _get_wrapper_address
 
 from study.errors import NonFiniteError, RunBoundError
-from study.fast.cache import compile_lock
+from study.fast.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
 with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
@@ -178,7 +178,9 @@ def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: 
 def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
           dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
     """The compiled model of the equations (of ``mechanism``'s description, else of ``eom``'s callables) and the
-    option arrays of the reference dynamics ``dyn``."""
+    option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.fast.cache.check``):
+    a run whose compiled code could not be saved is refused before anything is written."""
+    check()
     model = user_model(eom) if mechanism is None else compiled_model(mechanism)
     n_load = model.n_load_indicators
     if dyn.work_names != model.work_names:

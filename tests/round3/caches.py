@@ -37,9 +37,11 @@ def _own_cache(tmp: Path) -> Path:
     """A private copy of the shared numba cache (warmed first by a compiled run in this process)."""
     from study.simulate import simulate
 
+    from study.fast.cache import SOURCE_HASH
+
     simulate("quick_return", t_end=0.01, backend="compiled")
     own = tmp / "own_cache"
-    shutil.copytree((tmp / "cache" / "numba").resolve(), own / "numba", symlinks=False)
+    shutil.copytree((tmp / "cache" / "numba" / SOURCE_HASH).resolve(), own / "numba" / SOURCE_HASH)
     return own
 
 
@@ -68,7 +70,10 @@ def _healed(out: subprocess.CompletedProcess, damaged: Path) -> None:
 
 
 def _entry(cache: Path, pattern: str) -> Path:
-    found = sorted((cache / "numba").rglob(pattern))
+    """The entry of the current code (the folder of the fast path's source hash)."""
+    from study.fast.cache import SOURCE_HASH
+
+    found = sorted((cache / "numba" / SOURCE_HASH).rglob(pattern))
     assert found, f"no cache entry {pattern} under {cache}"
     return found[0]
 
