@@ -134,10 +134,16 @@ def kernel(signature=None, **options):
     return wrap
 
 
+def internal():
+    """:func:`kernel` for a function that only compiled code calls: without the Python and C wrappers numba would
+    otherwise build (and optimize, and save) for every one of them, the helpers compile faster."""
+    return kernel(no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
 @contextmanager
 def compile_lock():
     """Hold an exclusive lock on numba's cache folder while the compiled path's large kernels with declared
-    signatures compile or load: the frontend's entry kernels (on its import) and a generated module's (on its load).
+    signatures compile or load: the frontend's entry kernels (on first use) and a generated module's (on its load).
     Two processes that start together (the test workers, the pipeline's) would otherwise both compile the same
     kernels; the second waits and loads what the first saved. The small kernels with declared signatures that
     ``study.solver`` imports (the sgn functions, the stabilization biases, the friction phases) compile outside it.

@@ -28,10 +28,10 @@ from study.errors import NonFiniteError, RunBoundError
 from study.fast.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
-with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
-    from study.fast.dynamics import PIN_NOT_CONVERGED, accelerations_entry, no_phases, rhs_entry
-    from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
-                                 FAIL_STALL, FAIL_STEP, integrate_segment)
+from study.fast.dynamics import (ACCELERATIONS_ENTRY, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry, no_phases,
+                                 rhs_entry)
+from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
+                             FAIL_STEP, SEGMENT, integrate_segment)
 from study.fast.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
@@ -51,6 +51,17 @@ _FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
              FAIL_RHS: "the acceleration problem failed (singular saddle-point system or a Painleve case of "
                        "the friction solve)",
              FAIL_PROJECTION: "the projection failed (singular system or no convergence)"}
+
+
+def entry(dispatcher, signature):
+    """An entry kernel (the loop, ``rhs_entry``, ``accelerations_entry``), compiled or loaded for its declared
+    signature on first use, under the compile lock: a run pays only for the entries it calls (the compiled loop;
+    scipy's integrators on compiled evaluations call ``rhs_entry`` alone)."""
+    if not dispatcher.signatures:
+        with compile_lock():
+            dispatcher.compile(signature)
+            dispatcher.disable_compile()
+    return dispatcher
 
 
 @dataclass(frozen=True)
@@ -228,11 +239,12 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
     phases = FunctionAddress(compiled_phases(dyn), PHASES)
     p, lp = model.p, model.lp
     no_mode = np.zeros(0, dtype=np.int64)
+    rhs_kernel = entry(rhs_entry, RHS_ENTRY)
 
     def rhs(t: float, y: np.ndarray, mode=None) -> np.ndarray:
         dyn.nfev += 1
         dy = np.empty(y.size)
-        status = rhs_entry(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
+        status = rhs_kernel(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
                            no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy)
         if status != 0:
             dyn.rhs(t, y, mode)
@@ -250,7 +262,7 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     m, r = eom.n_coordinates, eom.n_constraints
     nt = len(eom.contacts) + len(eom.pin_frictions)
     out = np.zeros(m + r + 2 * nt)
-    status = accelerations_entry(s.model.module.evaluate, s.bias, s.phases, float(t),
+    status = entry(accelerations_entry, ACCELERATIONS_ENTRY)(s.model.module.evaluate, s.bias, s.phases, float(t),
                                  np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
                                  np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
     if status == PIN_NOT_CONVERGED:
@@ -298,8 +310,9 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
     first = float(step) if step is not None else 0.0
+    segment = entry(integrate_segment, SEGMENT)
     while True:
-        outcome, t_reached, i_event = integrate_segment(
+        outcome, t_reached, i_event = segment(
             model.module.evaluate, s.bias, s.phases, model.module.indicators, model.module.kinematics,
             METHOD_IDS[integrator], arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,

@@ -3,6 +3,8 @@
 Tries that damage numba's compiled cache run the command line in a child process on a private copy of the
 shared cache (``_own_cache``), never on the shared folder that ``isolate()`` links: a damaged entry there would
 break every other test. Tries on the cache folder itself (a file, read-only, relative, ...) run in this process.
+
+Tally (17 tries): before 7 good, 2 weak, 8 bad; after 17 good.
 """
 
 from __future__ import annotations
@@ -114,7 +116,7 @@ def _overwrite_index(own):
 
 
 def _valid_pickle_wrong_content(own):
-    path = _entry(own, "dynamics.rhs_entry-*.nbc")
+    path = _entry(own, "signs._sign-*.nbc")          # loaded by every process that imports study
     path.write_bytes(pickle.dumps(("not", "a", "compiled", "function")))
     return path
 
