@@ -56,6 +56,13 @@ def isolated(tmp_path, monkeypatch):
     return tmp_path
 
 
+def test_round_three_has_at_least_60_tries_in_six_groups():
+    names = [(t.group, t.name) for t in TRIES]
+    assert len(names) >= 60, len(names)
+    assert len(set(names)) == len(names)
+    assert {t.group for t in TRIES} == set(GROUPS)
+
+
 @pytest.mark.parametrize("attempt", [pytest.param(t, marks=pytest.mark.slow) if t.slow else t for t in TRIES],
                          ids=[f"{t.group}:{t.name}" for t in TRIES])
 def test_every_try_is_good(attempt, isolated):

@@ -1,32 +1,63 @@
-"""The one-off compile time of the compiled path: first call in a fresh cache, then a warm one (subprocesses)."""
+"""Time to the first result of each path, from a fresh process, with a cold and a warm cache.
+
+One measurement is one child process that produces one short quick-return result: the command line's
+``simulate quick_return --t-end 1`` on the reference path or the compiled path, or one Exudyn run of the same
+mechanism. Cold: the child's cache folder (``STUDY_CACHE_DIR``) is empty, so it generates and compiles everything
+it needs (sympy derivation, numba kernels); warm: a second child on the same folder. The numbers are the child's
+wall time seen from here and its CPU time (user + system, from its resource usage): on a shared machine the wall
+time varies with the load, the CPU time much less. Each is repeated (``repeats``, a fresh cold folder each time)
+and every repeat is a row, so the spread shows. These are benchmark numbers, never a test's bound.
+"""
 
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
 import sys
 import tempfile
+import time
+from pathlib import Path
 
 import pandas as pd
 
 from study.bench.harness import log
 
+T_END = 1.0   # [s] simulated: the run itself takes a few milliseconds; the rest is start-up and compilation
+EXUDYN = ("from study.exudyn_models import run; from study.params import load_parameters; "
+          f"run(load_parameters('quick_return', 'seed'), {T_END}, 1e-3)")
 
-def compile_time() -> pd.DataFrame:
-    """First compiled call in a fresh cache (subprocess): sympy code generation + numba compilation."""
-    code = ("import time; t0 = time.perf_counter(); from study.simulate import simulate\n"
-            "for m, v in (('quick_return', 'smooth_cutting'), ('slider_crank', 'sustained_sliding')):\n"
-            "    t = time.perf_counter(); simulate(m, variant=v, t_end=0.1, backend='compiled',"
-            " friction='regularized' if m == 'slider_crank' else None); print(m, time.perf_counter() - t)\n")
+
+def commands(out: Path) -> dict[str, list[str]]:
+    """The child process of each path (arguments after the interpreter)."""
+    cli = ["-m", "study", "simulate", "quick_return", "--t-end", str(T_END), "--out", str(out)]
+    return {"reference": [*cli, "--backend", "reference"], "compiled": [*cli, "--backend", "compiled"],
+            "exudyn": ["-c", EXUDYN]}
+
+
+def child(argv: list[str], cache: Path) -> tuple[float, float]:
+    """(wall [s], CPU [s]) of ``python argv`` with ``cache`` as its cache folder (numba's too)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "STUDY_TRACEBACK")}
+    env["STUDY_CACHE_DIR"] = str(cache)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def compile_time(repeats: int = 2, paths: tuple[str, ...] = ("reference", "compiled", "exudyn")) -> pd.DataFrame:
+    """One row per path, cache state (cold, warm) and repeat: the first result's wall and CPU seconds."""
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-        env["STUDY_CACHE_DIR"] = tmp
-        for label in ("fresh cache (code generation + compilation)", "warm cache (load from disk)"):
-            out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-            for line in out.stdout.split("\n"):
-                if line.strip():
-                    mech, sec = line.split()
-                    rows.append({"cache": label, "mechanism": mech, "first_call_wall_s": float(sec)})
-                    log(f"compile: {label} {mech}: {float(sec):.1f} s")
+    for repeat in range(repeats):
+        with tempfile.TemporaryDirectory(prefix="study_compile_time_") as tmp:
+            for path in paths:
+                argv = commands(Path(tmp) / f"{path}_result")[path]
+                cache = Path(tmp) / f"{path}_cache"
+                for state in ("cold", "warm"):
+                    wall, cpu = child(argv, cache)
+                    rows.append({"path": path, "cache": state, "mechanism": "quick_return", "repeat": repeat,
+                                 "first_call_wall_s": wall, "cpu_s": cpu})
+                    log(f"compile: {path} path, {state} cache, repeat {repeat}: {wall:.1f} s wall, {cpu:.1f} s CPU")
     return pd.DataFrame(rows)

@@ -3,7 +3,8 @@
 ``simulate(..., backend='compiled')`` runs here. Modules, one concern each:
 
 cache
-    Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``.
+    Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``, checked before
+    use, with entries that heal (``kernel``, numba's ``njit`` with that cache).
 signatures
     The numba function types shared by the generated code, the stabilization methods, the friction
     treatments and the kernels.
@@ -29,7 +30,7 @@ frontend
     and result assembly are the reference's (``study.solver.run``, ``study.solver.assemble``).
 """
 
-from study.fast import cache as _cache  # noqa: F401  (sets numba's cache folder before any kernel is defined)
+from study.fast import cache as _cache
 
 __all__ = ["CompiledModel", "compiled_model", "compiled_rhs", "simulate_compiled"]
 
@@ -38,6 +39,7 @@ def __getattr__(name: str):
     """The frontend's names, imported when first asked for: the compiled forms of the stabilization methods and
     friction treatments (study.solver) import study.fast.signs and .signatures, and the frontend imports them."""
     if name in __all__:
+        _cache.check()   # a cache folder that cannot be used is refused before the entry kernels compile or load
         from study.fast import frontend
 
         return getattr(frontend, name)

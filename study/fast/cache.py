@@ -1,20 +1,32 @@
-"""numba's on-disk cache for the fast path, keyed by the fast path's own sources.
+"""numba's on-disk cache for the study's compiled functions: where it lives, and entries that heal.
 
-numba invalidates a cached function only when *its own* file changes, not when a kernel it calls
-(in another module) changes. So every compiled artefact of the fast path goes to
-``cache_dir()/numba/<hash of study/fast/*.py>`` and a generated module to
-``cache_dir()/fast/<hash>/``: editing any fast-path source starts a fresh cache, and compilation
-is otherwise paid once per machine. An explicit ``NUMBA_CACHE_DIR`` in the environment wins.
+Every function the study compiles is defined with :func:`kernel` (``numba.njit`` with this cache), never with
+``njit(cache=True)``:
+
+- **where**: numba invalidates a cached function only when *its own* file changes, not when a kernel it calls
+  (in another module) changes. So every compiled artefact goes to ``cache_dir()/numba/<hash of the fast path's
+  sources>`` and a generated module to ``cache_dir()/fast/<hash>/``: editing any fast-path source starts a fresh
+  cache. An explicit ``NUMBA_CACHE_DIR`` in the environment wins. There is no other place: numba's own fallback
+  (a ``__pycache__`` beside the source, inside the package) is never used.
+- **checked**: a cache folder that cannot be used is refused by :func:`check` (``CacheFolderError`` naming
+  ``STUDY_CACHE_DIR`` or ``NUMBA_CACHE_DIR`` and the path) before a compiled run; while it is unusable nothing is
+  loaded from or saved to it (the kernels that ``import study`` compiles stay in memory).
+- **healing**: an entry that fails to load (an index or data file cut, overwritten or emptied) is deleted with one
+  :class:`CacheDiscardedWarning` naming its files, and the function is compiled again and saved afresh.
 """
 
 from __future__ import annotations
 
 import os
 import threading
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from study.model.compile import cache_dir
+from numba import njit
+from numba.core.caching import CompileResultCacheImpl, FunctionCache, UserProvidedCacheLocator
+
+from study.cache_folder import CacheFolderError, cache_dir, configured_cache_dir, usable_folder
 from study.sources import source_files, source_hash
 
 # Every module of the fast path, and the reference modules whose constants its kernels compile in.
@@ -22,25 +34,121 @@ _SOURCES = ("fast", "solver/friction", "solver/integrate.py")
 SOURCE_HASH = source_hash(source_files(*_SOURCES))[:12]
 
 
+class CacheDiscardedWarning(UserWarning):
+    """A compiled-cache entry could not be loaded: it was deleted and its function compiled again."""
+
+
+def _numba_root() -> tuple[Path, str | None]:
+    """(numba's cache folder, the variable that chose it), unchecked."""
+    env = os.environ.get("NUMBA_CACHE_DIR", "")
+    if env:
+        return Path(env).expanduser().absolute(), "NUMBA_CACHE_DIR"
+    root, variable = configured_cache_dir()
+    return root / "numba" / SOURCE_HASH, variable
+
+
 def generated_dir() -> Path:
-    """Folder of the generated numba modules."""
+    """Folder of the generated numba modules (the cache root checked)."""
     return cache_dir() / "fast" / SOURCE_HASH
 
 
 def numba_dir() -> Path:
-    """Folder of numba's compiled-function cache."""
-    return Path(os.environ.get("NUMBA_CACHE_DIR") or cache_dir() / "numba" / SOURCE_HASH)
+    """Folder of numba's compiled-function cache, checked (``CacheFolderError`` if unusable)."""
+    return usable_folder(*_numba_root())
+
+
+def check() -> None:
+    """Refuse (``CacheFolderError``) a compiled run whose cache folders cannot be used, before anything is written."""
+    generated_dir()
+    numba_dir()
+
+
+def _usable() -> bool:
+    try:
+        numba_dir()
+    except CacheFolderError:
+        return False
+    return True
+
+
+class _Locator(UserProvidedCacheLocator):
+    """numba's locator for a user-provided folder, with the study's folder and no fallback: numba's next choice
+    would be a ``__pycache__`` beside the source, inside the package."""
+
+    def __init__(self, py_func, py_file):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._cache_path = str(_numba_root()[0] / self.get_suitable_cache_subpath(py_file))
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        return cls(py_func, py_file)
+
+
+class _Impl(CompileResultCacheImpl):
+    _locator_classes = [_Locator]
+
+
+class HealingCache(FunctionCache):
+    """numba's per-function cache in the study's folder; an entry that fails to load is discarded (see the module
+    docstring)."""
+
+    _impl_class = _Impl
+
+    def load_overload(self, sig, target_context):
+        if not _usable():
+            return None
+        try:
+            return super().load_overload(sig, target_context)
+        except Exception as exc:   # noqa: BLE001 - any failure to read or rebuild an entry: discard it, recompile
+            self._discard(exc)
+            return None
+
+    def save_overload(self, sig, data):
+        if _usable():
+            super().save_overload(sig, data)
+
+    def _discard(self, exc: Exception) -> None:
+        index = Path(self._cache_file._index_path)
+        files = [index, *sorted(index.parent.glob(index.name[:-len(".nbi")] + ".*.nbc"))]
+        for path in files:
+            path.unlink(missing_ok=True)
+        why = " ".join(f"{type(exc).__name__}: {exc}".split())[:160]
+        warnings.warn(f"compiled cache entry {', '.join(p.name for p in files)} in {index.parent} could not be "
+                      f"loaded ({why}): discarded, recompiling", CacheDiscardedWarning, stacklevel=2)
+
+
+def kernel(signature=None, **options):
+    """``numba.njit(signature, **options)`` with the study's :class:`HealingCache` in place of ``cache=True``.
+
+    Used as ``@kernel()`` or ``@kernel(SIGNATURE, ...)``; with a signature the function compiles (or loads) at
+    once and only for it, as with ``njit``."""
+
+    def wrap(func):
+        dispatcher = njit(**options)(func)
+        dispatcher._cache = HealingCache(func)   # what njit(cache=True) does (Dispatcher.enable_caching)
+        if signature is not None:
+            dispatcher.compile(signature)
+            dispatcher.disable_compile()
+        return dispatcher
+    return wrap
+
+
+def internal():
+    """:func:`kernel` for a function that only compiled code calls: without the Python and C wrappers numba would
+    otherwise build (and optimize, and save) for every one of them, the helpers compile faster."""
+    return kernel(no_cpython_wrapper=True, no_cfunc_wrapper=True)
 
 
 @contextmanager
 def compile_lock():
     """Hold an exclusive lock on numba's cache folder while the compiled path's large kernels with declared
-    signatures compile or load: the frontend's entry kernels (on its import) and a generated module's (on its load).
+    signatures compile or load: the frontend's entry kernels (on first use) and a generated module's (on its load).
     Two processes that start together (the test workers, the pipeline's) would otherwise both compile the same
     kernels; the second waits and loads what the first saved. The small kernels with declared signatures that
     ``study.solver`` imports (the sgn functions, the stabilization biases, the friction phases) compile outside it.
-    Where ``fcntl`` is missing (not POSIX) or the cache folder is not writable there is no lock: each process
-    compiles, with the same result."""
+    Where ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result. The
+    folder is checked first (:func:`numba_dir`)."""
     try:
         import fcntl
     except ImportError:
@@ -48,14 +156,7 @@ def compile_lock():
     if fcntl is None or getattr(_state, "held", False):   # held by this thread already: flock would wait for itself
         yield
         return
-    folder = numba_dir()
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fh = open(folder / "compile.lock", "w")
-    except OSError:
-        yield
-        return
-    with fh:
+    with open(numba_dir() / "compile.lock", "w") as fh:
         fcntl.flock(fh, fcntl.LOCK_EX)
         _state.held = True
         try:
@@ -66,9 +167,3 @@ def compile_lock():
 
 
 _state = threading.local()
-
-
-if not os.environ.get("NUMBA_CACHE_DIR"):
-    import numba
-
-    numba.config.CACHE_DIR = str(numba_dir())

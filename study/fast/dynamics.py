@@ -29,8 +29,9 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 
+from study.fast.cache import internal, kernel
 from study.fast.linalg import lu_factor, lu_solve
 from study.fast.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
 from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
@@ -61,7 +62,7 @@ Workspace = namedtuple("Workspace", [
     "best_normal", "best_tol", "f", "vt", "stick", "s", "pin", "at", "counters"])
 
 
-@njit(cache=True)
+@internal()
 def workspace(m, r, nc, nw, npin):
     """Every array one evaluation needs, allocated once per integration (nc contacts and npin pins: nt rows of Jt).
     ``at``: the time of the last failing evaluation; counters: [evaluations, its status]."""
@@ -77,20 +78,20 @@ def workspace(m, r, nc, nw, npin):
         np.zeros(2, np.int64))
 
 
-@njit(cache=True)
+@internal()
 def dimensions(ci):
     """(m, r, nc, nw, np): coordinates, constraints, sliding contacts, load works, pins, stored at the end of ci."""
     k = ci.size
     return ci[k - 1], ci[k - 2], ci[k - 3], ci[k - 4], ci[k - 5]
 
 
-@njit(cache=True)
+@internal()
 def pin_block(nc):
     """Offset in cf of the pins' numbers (mu_static radius, mu_kinetic radius, torque; delta, rtol)."""
     return CF_HEADER + 3 * nc
 
 
-@njit(cache=True)
+@internal()
 def constraint_rhs(bias, ci, cf, ws):
     """ws.c = gamma + b(Phi, Phidot) of the stabilization method: its compiled counterpart ``bias``
     (``compiled_bias`` of its class in study.solver.stabilization), parameters at cf[ci[CI_BIAS]:]."""
@@ -105,12 +106,12 @@ def constraint_rhs(bias, ci, cf, ws):
         ws.c[i] = ws.gamma[i] + ws.c[i]
 
 
-@njit(PHASES, cache=True)
+@kernel(PHASES)
 def no_phases(mode, nlm, vt, cf, off, stick, s):
     """The ``phases`` argument of a run without friction (not called)."""
 
 
-@njit(cache=True)
+@internal()
 def _friction(ci, cf, ws, m, r, nc):
     """The coupled normal-force / friction problem (study.solver.friction.FrictionDynamics._solve) on top of the
     solution without tangential forces in ws.qdd, ws.lam. The rows of Jt with a tangential force are the stuck ones
@@ -216,7 +217,7 @@ def _friction(ci, cf, ws, m, r, nc):
     return OK
 
 
-@njit(cache=True)
+@internal()
 def _pins(ci, cf, ws, m, r, nc, npin):
     """The pins' torques (FrictionDynamics._solve_pins): Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s = 0
     from tau = 0 (ws.qdd, ws.lam hold that solution), the contacts' solve repeated at every iterate. s = 0 for a
@@ -291,7 +292,7 @@ def _pins(ci, cf, ws, m, r, nc, npin):
     return PIN_NOT_CONVERGED
 
 
-@njit(cache=True)
+@internal()
 def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
     """qdd, lambda (and with friction f, v_t, N) at the state in ws.q, ws.qd; returns a status code."""
     evaluate(t, ws.q, ws.qd, mode, p, lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
@@ -334,7 +335,7 @@ def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
     return _friction(ci, cf, ws, m, r, nt)
 
 
-@njit(cache=True)
+@internal()
 def note_failure(ws, status, t):
     """Keep a failing evaluation's status and time (ws.counters[1], ws.at[0]; its q, qd stay in ws.q, ws.qd) for the
     loop's report."""
@@ -342,7 +343,7 @@ def note_failure(ws, status, t):
     ws.at[0] = t
 
 
-@njit(cache=True)
+@internal()
 def rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, dy):
     """dy = [qd, qdd, load powers, friction powers f_j v_t,j of the contacts, then the pins]; returns a status code."""
     m = ws.q.size
@@ -364,7 +365,12 @@ def rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, dy):
     return status
 
 
-@njit(types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64), cache=True)
+#: the entry kernels' declared signatures: each compiles (or loads) for it on first use (study.fast.frontend.entry)
+ACCELERATIONS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64)
+RHS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1)
+
+
+@kernel()
 def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat):
     """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f] (N and f: contacts, then pins:
     |R| and the torque). For tests and timing."""
@@ -388,7 +394,7 @@ def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, o
     return status
 
 
-@njit(types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1), cache=True)
+@kernel()
 def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy):
     """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators; returns a status code."""
     m, r, nc, nw, npin = dimensions(ci)

@@ -25,13 +25,13 @@ from numba.core.typing.typeof import typeof_impl
 from numba.experimental.function_type import _get_wrapper_address
 
 from study.errors import NonFiniteError, RunBoundError
-from study.fast.cache import compile_lock
+from study.fast.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
-with compile_lock():   # the entry kernels have declared signatures: they compile (or load) on import
-    from study.fast.dynamics import PIN_NOT_CONVERGED, accelerations_entry, no_phases, rhs_entry
-    from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS,
-                                 FAIL_STALL, FAIL_STEP, integrate_segment)
+from study.fast.dynamics import (ACCELERATIONS_ENTRY, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry, no_phases,
+                                 rhs_entry)
+from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
+                             FAIL_STEP, SEGMENT, integrate_segment)
 from study.fast.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
@@ -51,6 +51,17 @@ _FAILURES = {FAIL_STEP: "the step size fell below the round-off limit",
              FAIL_RHS: "the acceleration problem failed (singular saddle-point system or a Painleve case of "
                        "the friction solve)",
              FAIL_PROJECTION: "the projection failed (singular system or no convergence)"}
+
+
+def entry(dispatcher, signature):
+    """An entry kernel (the loop, ``rhs_entry``, ``accelerations_entry``), compiled or loaded for its declared
+    signature on first use, under the compile lock: a run pays only for the entries it calls (the compiled loop;
+    scipy's integrators on compiled evaluations call ``rhs_entry`` alone)."""
+    if not dispatcher.signatures:
+        with compile_lock():
+            dispatcher.compile(signature)
+            dispatcher.disable_compile()
+    return dispatcher
 
 
 @dataclass(frozen=True)
@@ -178,7 +189,9 @@ def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: 
 def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
           dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
     """The compiled model of the equations (of ``mechanism``'s description, else of ``eom``'s callables) and the
-    option arrays of the reference dynamics ``dyn``."""
+    option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.fast.cache.check``):
+    a run whose compiled code could not be saved is refused before anything is written."""
+    check()
     model = user_model(eom) if mechanism is None else compiled_model(mechanism)
     n_load = model.n_load_indicators
     if dyn.work_names != model.work_names:
@@ -226,11 +239,12 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynam
     phases = FunctionAddress(compiled_phases(dyn), PHASES)
     p, lp = model.p, model.lp
     no_mode = np.zeros(0, dtype=np.int64)
+    rhs_kernel = entry(rhs_entry, RHS_ENTRY)
 
     def rhs(t: float, y: np.ndarray, mode=None) -> np.ndarray:
         dyn.nfev += 1
         dy = np.empty(y.size)
-        status = rhs_entry(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
+        status = rhs_kernel(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
                            no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy)
         if status != 0:
             dyn.rhs(t, y, mode)
@@ -248,7 +262,7 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     m, r = eom.n_coordinates, eom.n_constraints
     nt = len(eom.contacts) + len(eom.pin_frictions)
     out = np.zeros(m + r + 2 * nt)
-    status = accelerations_entry(s.model.module.evaluate, s.bias, s.phases, float(t),
+    status = entry(accelerations_entry, ACCELERATIONS_ENTRY)(s.model.module.evaluate, s.bias, s.phases, float(t),
                                  np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
                                  np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
     if status == PIN_NOT_CONVERGED:
@@ -265,6 +279,38 @@ def _pin_failure(dyn: Dynamics, t: float, q, qd, mode) -> None:
     dyn.contact_solution(float(t), np.asarray(q, dtype=float), np.asarray(qd, dtype=float), tuple(mode) or None)
     raise RuntimeError(f"compiled solve of the revolute joints' friction torques did not converge at t = {t:.9g} s "
                        f"where the reference solve converges; rerun with backend='reference'")
+
+
+def _raise_failure(outcome: int, integrator: str, t_reached: float, i_event: int, counters: np.ndarray,
+                   y_end: np.ndarray, mode: tuple, s: Setup, max_evaluations: float, min_step: float) -> None:
+    """The error of a compiled segment that ended with a failure code (``outcome < 0``), with its counts."""
+    m = s.dyn.eom.n_coordinates
+    if outcome == FAIL_EVALUATIONS:
+        raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[2]} evaluations "
+                            f"reached max_evaluations = {max_evaluations:g} (a stalled or far too long run; "
+                            f"max_evaluations= raises the bound)", t=float(t_reached), quantity="evaluations",
+                            evaluations=int(counters[2]))
+    if outcome == FAIL_STALL:
+        raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[5]} steps in a "
+                            f"row below min_step = {min_step:.3g} s (a stall: the solution is near a singularity "
+                            f"or a discontinuity; min_step= overrides)", t=float(t_reached), quantity="step",
+                            steps=int(counters[1]))
+    if outcome == FAIL_LOCATE:
+        raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: the switch of switching "
+                            f"function {i_event} cannot be located within the step from there (its interpolant "
+                            f"returns to the side it started on and stays there): the step is too large for the "
+                            f"solution (use a smaller rtol)", t=float(t_reached), quantity="step")
+    if outcome == FAIL_NONFINITE:
+        raise NonFiniteError(f"{integrator} (compiled) failed at t = {t_reached:.9g} s: a non-finite value in the "
+                             f"right-hand side (accelerations, multipliers or load powers) of the step ending "
+                             f"there; likely causes: a step too large for the solution (RK4), non-finite "
+                             f"forces, or a singular configuration", t=float(t_reached),
+                             quantity="rhs")
+    if outcome == FAIL_RHS and counters[6] == PIN_NOT_CONVERGED:
+        _pin_failure(s.dyn, t_reached, y_end[:m], y_end[m:2 * m], mode)
+    if outcome < 0:
+        raise RuntimeError(f"{integrator} (compiled) failed at t = {t_reached:.9g}: {_FAILURES[outcome]}; "
+                           f"rerun with backend='reference' for a diagnosis")
 
 
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,
@@ -296,39 +342,16 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
     first = float(step) if step is not None else 0.0
+    segment = entry(integrate_segment, SEGMENT)
     while True:
-        outcome, t_reached, i_event = integrate_segment(
+        outcome, t_reached, i_event = segment(
             model.module.evaluate, s.bias, s.phases, model.module.indicators, model.module.kinematics,
             METHOD_IDS[integrator], arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
             y_out, mode_out, counters, y_end, bounds)
         restarts += 1
-        if outcome == FAIL_EVALUATIONS:
-            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[2]} evaluations "
-                                f"reached max_evaluations = {max_evaluations:g} (a stalled or far too long run; "
-                                f"max_evaluations= raises the bound)", t=float(t_reached), quantity="evaluations",
-                                evaluations=int(counters[2]))
-        if outcome == FAIL_STALL:
-            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: {counters[5]} steps in a "
-                                f"row below min_step = {min_step:.3g} s (a stall: the solution is near a singularity "
-                                f"or a discontinuity; min_step= overrides)", t=float(t_reached), quantity="step",
-                                steps=int(counters[1]))
-        if outcome == FAIL_LOCATE:
-            raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: the switch of switching "
-                                f"function {i_event} cannot be located within the step from there (its interpolant "
-                                f"returns to the side it started on and stays there): the step is too large for the "
-                                f"solution (use a smaller rtol)", t=float(t_reached), quantity="step")
-        if outcome == FAIL_NONFINITE:
-            raise NonFiniteError(f"{integrator} (compiled) failed at t = {t_reached:.9g} s: a non-finite value in the "
-                                 f"right-hand side (accelerations, multipliers or load powers) of the step ending "
-                                 f"there; likely causes: a step too large for the solution (RK4), non-finite "
-                                 f"forces, or a singular configuration", t=float(t_reached),
-                                 quantity="rhs")
-        if outcome == FAIL_RHS and counters[6] == PIN_NOT_CONVERGED:
-            _pin_failure(s.dyn, t_reached, y_end[:m], y_end[m:2 * m], mode)
         if outcome < 0:
-            raise RuntimeError(f"{integrator} (compiled) failed at t = {t_reached:.9g}: {_FAILURES[outcome]}; "
-                               f"rerun with backend='reference' for a diagnosis")
+            _raise_failure(outcome, integrator, t_reached, i_event, counters, y_end, mode, s, max_evaluations, min_step)
         if outcome == DONE:
             break
         t, y = float(t_reached), y_end.copy()

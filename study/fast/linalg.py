@@ -7,10 +7,10 @@ call and allocation cost of LAPACK at this size. Partial pivoting is what LAPACK
 
 from __future__ import annotations
 
-from numba import njit
+from study.fast.cache import internal
 
 
-@njit(cache=True)
+@internal()
 def lu_factor(A, piv):
     """Factor the square A in place (L unit lower, U upper); returns False if A is singular."""
     n = A.shape[0]
@@ -36,7 +36,7 @@ def lu_factor(A, piv):
     return True
 
 
-@njit(cache=True)
+@internal()
 def lu_solve(LU, piv, b):
     """Solve with a factor from :func:`lu_factor`; b is overwritten with the solution."""
     n = LU.shape[0]

@@ -17,8 +17,9 @@ requested output, not by the number of steps.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, types
+from numba import types
 
+from study.fast.cache import internal, kernel
 from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, accelerations,
                                  dimensions, note_failure, pin_block, rhs, workspace)
 from study.fast.project import project
@@ -40,7 +41,7 @@ SEGMENT = types.Tuple((i8, f8, i8))(
     V1, I1, V1, V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
 
 
-@njit(cache=True)
+@internal()
 def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, ws, out):
     """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact, then 2 per pin)."""
     m, nlm = ws.q.size, ci[CI_NLOADMODE]
@@ -71,14 +72,14 @@ def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, 
     return status
 
 
-@njit(cache=True)
+@internal()
 def _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp, g):
     dense_eval(method, D, n_rows, y_old, (s - t_old) / h, ytmp)
     event_values(evaluate, bias, phases, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
     return g[i]
 
 
-@njit(cache=True)
+@internal()
 def locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, mode, p, lp, ci, cf, ws,
            ytmp, g):
     """Zero of switching function i on [xa, xb] along the interpolant (scipy's brentq algorithm)."""
@@ -126,7 +127,7 @@ def locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_ol
     return xcur
 
 
-@njit(cache=True)
+@internal()
 def first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_new, i, mode, p, lp, ci,
                    cf, ws, ytmp, g):
     """The first time in [t_old, t_new] at which switching function i leaves the side mode[i], or NaN if the
@@ -158,7 +159,7 @@ def first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old,
     return np.nan
 
 
-@njit(cache=True)
+@internal()
 def _store(kinematics, t, y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters):
     k = counters[0]
     for i in range(y.size):
@@ -176,7 +177,7 @@ def _store(kinematics, t, y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, coun
     return 0
 
 
-@njit(cache=True)
+@internal()
 def _rhs_failed(ws, y_end, counters):
     """FAIL_RHS at the time of the failing evaluation; its q, qd to y_end[:2m] and its status to counters[6]."""
     m = ws.q.size
@@ -187,12 +188,12 @@ def _rhs_failed(ws, y_end, counters):
     return FAIL_RHS, ws.at[0], -1
 
 
-@njit(cache=True)
+@internal()
 def _due(t_out, k, t_hi):
     return k < t_out.size and (t_out[k] < t_hi or abs(t_out[k] - t_hi) <= SAMPLE_ATOL * max(1.0, abs(t_hi)))
 
 
-@njit(SEGMENT, cache=True)
+@kernel()   # compiled (or loaded) for SEGMENT on first use (study.fast.frontend.entry)
 def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0,
                       t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.

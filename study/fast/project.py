@@ -7,15 +7,15 @@ q is moved onto Phi = 0 by Gauss-Newton corrections dq = -W^-1 Phi_q^T (Phi_q W^
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from study.fast.cache import internal
 from study.fast.dynamics import CF_PROJ_TOL, CI_PROJ_MASS, CI_PROJ_MAXITER
 from study.fast.linalg import lu_factor, lu_solve
 
 OK, SINGULAR, NOT_CONVERGED = 0, 1, 4
 
 
-@njit(cache=True)
+@internal()
 def _correct(J, M, mass, residual, out):
     """out = -W^-1 J^T (J W^-1 J^T)^-1 residual; returns False if a system is singular."""
     r, m = J.shape
@@ -56,7 +56,7 @@ def _correct(J, M, mass, residual, out):
     return True
 
 
-@njit(cache=True)
+@internal()
 def project(kinematics, y, p, ci, cf, m, r):
     """Project y = [q, qd, ...] in place; returns (changed, status)."""
     tol, mass, max_iter = cf[CF_PROJ_TOL], ci[CI_PROJ_MASS] == 1, ci[CI_PROJ_MAXITER]

@@ -15,30 +15,31 @@ import math
 import numpy as np
 from numba import njit
 
+from study.fast.cache import kernel
 from study.fast.signatures import SIGN
 
 
-@njit(SIGN, cache=True)
+@kernel(SIGN)
 def _sign(s, width):
     return np.sign(s)
 
 
-@njit(SIGN, cache=True)
+@kernel(SIGN)
 def _sat(s, width):
     return np.minimum(np.maximum(s / width, -1.0), 1.0)
 
 
-@njit(SIGN, cache=True)
+@kernel(SIGN)
 def _tanh(s, width):
     return np.tanh(s / width)
 
 
-@njit(SIGN, cache=True)
+@kernel(SIGN)
 def _arctan(s, width):
     return (2.0 / math.pi) * np.arctan(s / width)
 
 
-@njit(SIGN, cache=True)
+@kernel(SIGN)
 def _sqrt(s, width):
     return s / np.sqrt(s * s + width * width)
 

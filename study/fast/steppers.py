@@ -15,10 +15,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from scipy.integrate import DOP853, RK23, RK45
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
+from study.fast.cache import internal
 from study.fast.dynamics import rhs
 from study.fast.support import METHOD_IDS
 
@@ -46,7 +46,7 @@ def tableau(method: str) -> tuple:
     raise ValueError(f"no compiled integrator {method!r}")
 
 
-@njit(cache=True)
+@internal()
 def rms(v):
     s = 0.0
     for x in v:
@@ -54,7 +54,7 @@ def rms(v):
     return math.sqrt(s / v.size)
 
 
-@njit(cache=True)
+@internal()
 def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol, atol, mode, p, lp, ci, cf, ws, tmp,
                         f1):
     """scipy.integrate._ivp.common.select_initial_step (Hairer, Norsett & Wanner II.4)."""
@@ -85,7 +85,7 @@ def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol
     return min(100 * h0, h1, interval), status
 
 
-@njit(cache=True)
+@internal()
 def stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, first, last, mode, p, lp, ci, cf, ws, tmp):
     """K[s] = f(t + C[s] h, y + h sum_j A[s, j] K[j]) for s in first..last-1; returns a status."""
     A, C = tab[0], tab[2]
@@ -102,7 +102,7 @@ def stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, first, last, mode,
     return 0
 
 
-@njit(cache=True)
+@internal()
 def error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol):
     """scipy's error norm of an embedded pair (DOP853: its combined 5th/3rd-order estimate)."""
     n = y.size
@@ -131,7 +131,7 @@ def error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol):
     return math.sqrt(acc2 / n)
 
 
-@njit(cache=True)
+@internal()
 def combine(tab, n_stages, y, h, K, y_new):
     """y_new = y + h sum_s B[s] K[s]."""
     B = tab[1]
@@ -142,7 +142,7 @@ def combine(tab, n_stages, y, h, K, y_new):
         y_new[i] = y[i] + h * acc
 
 
-@njit(cache=True)
+@internal()
 def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, y_new, f_old, f_new, K, D,
                 mode, p, lp, ci, cf, ws, tmp):
     """Coefficients D of the step's interpolant (scipy's RkDenseOutput / Dop853DenseOutput / Hermite)."""
@@ -176,7 +176,7 @@ def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, 
     return 0
 
 
-@njit(cache=True)
+@internal()
 def dense_eval(method, D, n_rows, y_old, x, out):
     """The step's interpolant at x = (t - t_old) / h."""
     n = y_old.size

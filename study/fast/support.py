@@ -1,7 +1,7 @@
 """What the compiled backend supports, checked before anything is compiled.
 
-Importing the compiled frontend compiles its kernels (about a minute on a cold cache), so a run that the compiled
-backend cannot do is refused from here, by ``study.simulate`` as soon as its arguments are checked.
+A compiled run compiles the kernels it needs on a cold cache (most of a minute), so a run that the compiled backend
+cannot do is refused from here, by ``study.simulate`` as soon as its arguments are checked.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ from types import SimpleNamespace
 from numba import njit
 from numba.core.errors import NumbaError
 
+from study.fast.cache import kernel
 from study.fast.signatures import EVALUATE, INDICATORS, KINEMATICS
 from study.model.eom import EquationsOfMotion, _no_forces
 
@@ -43,7 +44,7 @@ def _kinematics_kernel(mass, phi, phi_q):
     return kinematics
 
 
-@njit(INDICATORS, cache=True)
+@kernel(INDICATORS)
 def _no_indicators(t, q, qd, p, lp, out):
     return
 

@@ -3,7 +3,8 @@
 The generated module (plain Python with ``math`` scalar functions after common-subexpression
 elimination) is keyed by a hash of the symbolic description, of this package's source and of sympy's
 version, and stored under the cache folder
-(``$STUDY_CACHE_DIR`` or ``<repo>/.cache``)/codegen, so the sympy derivation is paid once.
+(``study.cache_folder.cache_dir()``: ``$STUDY_CACHE_DIR``, ``.cache`` in a checkout, or the user's cache
+folder)/codegen, so the sympy derivation is paid once.
 Parameters stay symbolic in the generated code; every variant reuses it.
 """
 
@@ -11,7 +12,6 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import os
 import re
 from pathlib import Path
 from types import ModuleType
@@ -20,17 +20,12 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from study.cache_folder import cache_dir  # noqa: F401  (the cache root; imported from here by callers)
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
 from study.model.eom import EquationsOfMotion, PinFriction, SlidingContact
 from study.sources import source_files, source_hash
-
-def cache_dir() -> Path:
-    """Root of the on-disk cache: $STUDY_CACHE_DIR, else ``.cache`` in the repository."""
-    env = os.environ.get("STUDY_CACHE_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[2] / ".cache"
-
 
 def _generator_source() -> str:
     """The source of the derivation and code generation (study/model/*.py) and sympy's version."""

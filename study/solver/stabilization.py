@@ -26,9 +26,9 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from study import arguments
+from study.fast.cache import kernel
 from study.fast.signatures import BIAS
 from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 from study.reference_data import tolerance
@@ -71,19 +71,19 @@ class Stabilization:
         return {"stabilization": self.name}
 
 
-@njit(BIAS, cache=True)
+@kernel(BIAS)
 def _zero_bias(phi, phidot, cf, off, out):
     for i in range(phi.size):
         out[i] = 0.0
 
 
-@njit(BIAS, cache=True)
+@kernel(BIAS)
 def _baumgarte_bias(phi, phidot, cf, off, out):
     for i in range(phi.size):   # cf[off] = 2 d w, cf[off + 1] = w^2
         out[i] = -cf[off] * phidot[i] - cf[off + 1] * phi[i]
 
 
-@njit(BIAS, cache=True)
+@kernel(BIAS)
 def _sliding_mode_bias(phi, phidot, cf, off, out):
     r = phi.size   # cf[off:] = SIGN_IDS[sgn], width, Lambda (r), K (r), k (r)
     kind, width = int(cf[off]), cf[off + 1]

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from numba import njit
 
+from study.fast.cache import kernel
 from study.fast.signatures import PHASES
 from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 
@@ -49,7 +49,7 @@ RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 DEFAULT_EPS = 1e-3
 
 
-@njit(cache=True)
+@kernel()
 def friction_level(coefficient, normal, constant):
     """The size of a Coulomb force or torque, constant + coefficient |normal|: a contact's R + mu |N| [N], a pin's
     T0 + mu r |R|_delta [N m]; with the static coefficient, the limit a stuck entry holds. Scalars (compiled) or
@@ -57,14 +57,14 @@ def friction_level(coefficient, normal, constant):
     return constant + coefficient * np.abs(normal)
 
 
-@njit(cache=True)
+@kernel()
 def pin_norm(rx, ry, delta):
     """|R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) of a pin's reaction (delta: ``pin_friction_norm_width``), the smooth
     norm that replaces |R|'s kink at R = 0 in the pin's friction torque. Scalars or arrays (``.py_func``)."""
     return np.sqrt(rx * rx + ry * ry + delta * delta)
 
 
-@njit(PHASES, cache=True)
+@kernel(PHASES)
 def _mode_phases(mode, nlm, vt, cf, off, stick, s):
     """ExactCoulomb.phases: mode = the loads' nlm entries, then per contact (+1 stick / -1 slip, direction)."""
     for j in range(vt.size):
@@ -72,7 +72,7 @@ def _mode_phases(mode, nlm, vt, cf, off, stick, s):
         s[j] = 0.0 if stick[j] else float(mode[nlm + 2 * j + 1])
 
 
-@njit(PHASES, cache=True)
+@kernel(PHASES)
 def _slip_phases(mode, nlm, vt, cf, off, stick, s):
     """SlipFactor.phases, with cf[off:] = SIGN_IDS[sgn], eps (SlipFactor.compiled_parameters)."""
     kind, eps = int(cf[off]), cf[off + 1]
