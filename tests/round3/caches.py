@@ -138,10 +138,13 @@ def _mechanism_entry(damage, pattern):
     return action
 
 
+# These three compile the whole compiled path in a cache of their own, twice (about 45 s of CPU each): they run in
+# the slow suite (make verify); make test keeps the kernel tries above, which heal the same way.
 add(G, "mechanism_nbi_empty_is_recompiled",
-    _mechanism_entry(lambda p: p.write_bytes(b""), "study_fast_quick_return_*.evaluate-*.nbi"), OK)
+    _mechanism_entry(lambda p: p.write_bytes(b""), "study_fast_quick_return_*.evaluate-*.nbi"), OK, slow=True)
 add(G, "mechanism_nbc_truncated_is_recompiled",
-    _mechanism_entry(lambda p: p.write_bytes(p.read_bytes()[:100]), "study_fast_quick_return_*.kinematics-*.nbc"), OK)
+    _mechanism_entry(lambda p: p.write_bytes(p.read_bytes()[:100]), "study_fast_quick_return_*.kinematics-*.nbc"), OK,
+    slow=True)
 
 
 def _generated_source_edited(tmp):
@@ -156,7 +159,7 @@ def _generated_source_edited(tmp):
     assert "N_WORK = 1 + " not in source.read_text(), "the edit survived"
 
 
-add(G, "generated_fast_source_edited_is_regenerated", _generated_source_edited, OK)
+add(G, "generated_fast_source_edited_is_regenerated", _generated_source_edited, OK, slow=True)
 
 
 def _clean_run_writes_nothing_in_the_package(tmp):
