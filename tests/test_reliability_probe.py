@@ -736,19 +736,19 @@ def test_every_try_is_good(attempt, isolated):
     assert verdict == "good", what
 
 
-if __name__ == "__main__":   # the tally: python tests/test_reliability_probe.py [name-fragment]
+def print_tally(chosen: list, grade_one) -> None:
+    """Run each try in a folder of its own and print its verdict, then the tally in all and per group."""
     import tempfile
     from collections import Counter
 
     os.environ.pop("STUDY_TRACEBACK", None)
-    chosen = [t for t in TRIES if len(sys.argv) < 2 or sys.argv[1] in t.name]
     tally: Counter = Counter()
     for t in chosen:
         with tempfile.TemporaryDirectory() as d:
             cwd, env = os.getcwd(), os.environ.get("STUDY_CACHE_DIR")
             isolate(Path(d))
             try:
-                verdict, what = judge(t, Path(d))
+                verdict, what = grade_one(t, Path(d))
             except Exception:  # noqa: BLE001
                 verdict, what = "bad", traceback.format_exc().splitlines()[-1]
             finally:
@@ -756,7 +756,11 @@ if __name__ == "__main__":   # the tally: python tests/test_reliability_probe.py
                 os.environ.pop("STUDY_CACHE_DIR") if env is None else os.environ.update(STUDY_CACHE_DIR=env)
         tally[verdict] += 1
         tally[(t.group, verdict)] += 1
-        print(f"{verdict:4} {t.group:18} {t.name:40} {what}", flush=True)
+        print(f"{verdict:4} {t.group:28} {t.name:44} {what}", flush=True)
     print({k: v for k, v in tally.items() if isinstance(k, str)}, len(chosen))
     for group in dict.fromkeys(t.group for t in chosen):
-        print(f"  {group:20}", {v: tally[(group, v)] for v in ("good", "weak", "bad")})
+        print(f"  {group:28}", {v: tally[(group, v)] for v in ("good", "weak", "bad")})
+
+
+if __name__ == "__main__":   # the tally: python tests/test_reliability_probe.py [name-fragment]
+    print_tally([t for t in TRIES if len(sys.argv) < 2 or sys.argv[1] in t.name], judge)

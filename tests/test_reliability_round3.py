@@ -9,11 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import io
-import os
 import sys
-import tempfile
-import traceback
-from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -22,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import round3  # noqa: E402
 from round3 import GROUPS, OK, TRIES  # noqa: E402
 from round3 import caches, defaults, folders, tables, user_file, work_bounds  # noqa: E402,F401
-from test_reliability_probe import isolate, judge  # noqa: E402
+from test_reliability_probe import isolate, judge, print_tally  # noqa: E402
 from study.cli import main  # noqa: E402
 
 
@@ -71,23 +67,4 @@ def test_every_try_is_good(attempt, isolated):
 
 
 if __name__ == "__main__":
-    os.environ.pop("STUDY_TRACEBACK", None)
-    chosen = [t for t in TRIES if len(sys.argv) < 2 or sys.argv[1] in t.name or sys.argv[1] == t.group]
-    tally: Counter = Counter()
-    for t in chosen:
-        with tempfile.TemporaryDirectory() as d:
-            cwd, env = os.getcwd(), os.environ.get("STUDY_CACHE_DIR")
-            isolate(Path(d))
-            try:
-                verdict, what = grade(t, Path(d))
-            except Exception:  # noqa: BLE001
-                verdict, what = "bad", traceback.format_exc().splitlines()[-1]
-            finally:
-                os.chdir(cwd)
-                os.environ.pop("STUDY_CACHE_DIR") if env is None else os.environ.update(STUDY_CACHE_DIR=env)
-        tally[verdict] += 1
-        tally[(t.group, verdict)] += 1
-        print(f"{verdict:4} {t.group:28} {t.name:44} {what}", flush=True)
-    print({k: v for k, v in tally.items() if isinstance(k, str)}, len(chosen))
-    for group in dict.fromkeys(t.group for t in chosen):
-        print(f"  {group:28}", {v: tally[(group, v)] for v in ("good", "weak", "bad")})
+    print_tally([t for t in TRIES if len(sys.argv) < 2 or sys.argv[1] in t.name or sys.argv[1] == t.group], grade)
