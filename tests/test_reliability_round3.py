@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import round3  # noqa: E402
 from round3 import GROUPS, OK, TRIES  # noqa: E402
 from round3 import caches, defaults, folders, tables, user_file, work_bounds  # noqa: E402,F401
-from test_reliability_probe import isolate, judge, print_tally  # noqa: E402
+from test_reliability_probe import isolated, judge, print_tally  # noqa: E402,F401 (isolated: a fixture)
 from study.cli import main  # noqa: E402
 
 
@@ -44,14 +44,6 @@ def grade(t: round3.Try, tmp: Path) -> tuple[str, str]:
     return "good", "succeeded and checked"
 
 
-@pytest.fixture
-def isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("STUDY_CACHE_DIR", "")
-    monkeypatch.chdir(tmp_path)
-    isolate(tmp_path)
-    return tmp_path
-
-
 def test_round_three_has_at_least_60_tries_in_six_groups():
     names = [(t.group, t.name) for t in TRIES]
     assert len(names) >= 60, len(names)
@@ -61,7 +53,7 @@ def test_round_three_has_at_least_60_tries_in_six_groups():
 
 @pytest.mark.parametrize("attempt", [pytest.param(t, marks=pytest.mark.slow) if t.slow else t for t in TRIES],
                          ids=[f"{t.group}:{t.name}" for t in TRIES])
-def test_every_try_is_good(attempt, isolated):
+def test_every_try_is_good(attempt, isolated):  # noqa: F811 - the probe's fixture
     verdict, what = grade(attempt, isolated)
     assert verdict == "good", what
 
