@@ -270,20 +270,12 @@ add(G, "stale_entries_of_another_version_ignored", _stale_entries_ignored, OK)
 
 
 # --- 3. the pipeline's saved runs ---------------------------------------------------------------------------
-ONE_CASE = ('[study]\nsummary = "study.studies.sliding_mode"\n[[group]]\nname = "g"\nmechanism = "quick_return"\nt_end = 0.1\n'
-            'options = { integrator = "RK45", rtol = 1e-6, atol = 1e-8, output_step = 0.05 }\n')
-
-
 def _store_json_missing(tmp):
     """A saved run whose JSON is gone (its CSV left alone) is computed again, not half-read."""
     import study.pipeline as pl
+    from test_reliability_catalogue import _one_case_store
 
-    folder = tmp / "cases"
-    folder.mkdir()
-    (folder / "one.toml").write_text(ONE_CASE)
-    case = pl.load_case_list(folder / "one.toml").cases[0]
-    store = pl.Store(tmp / "cache" / "runs")
-    pl.run_cases([case], store, pl.InlineExecutor(), stream=io.StringIO())
+    case, store = _one_case_store(tmp)
     first = store.load(case)
     store.file(case, ".json").unlink()          # the pair broken: its CSV without its JSON
     log = io.StringIO()
