@@ -48,7 +48,7 @@ import handwritten  # noqa: E402
 from study import pipeline as pl  # noqa: E402
 from study.cli import main  # noqa: E402
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError,  # noqa: E402
-                          RunTooLargeError, SimulationError)
+                          SimulationError)
 from study.params import ParameterError, load_parameters  # noqa: E402
 from study.results import SimulationResult  # noqa: E402
 from study.simulate import simulate  # noqa: E402

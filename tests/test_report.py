@@ -12,7 +12,6 @@ import pytest
 
 from study import pipeline as pl
 from study.report import build_report
-from study import errata
 from study.errata.table import errata_markdown
 from study.report.render import markdown_to_html, md_math, md_table, number_figures
 from study.pipeline.tables import record_written
