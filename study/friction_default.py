@@ -9,13 +9,13 @@ stick/slip treatment. Asked to run without friction (``friction='none'``), a run
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
+
+from study.run_arguments import DEFAULT_FRICTION, check_arguments
 
 if TYPE_CHECKING:
     from study.model.eom import EquationsOfMotion
 
-# friction= unless told otherwise: the parameter set's treatment of every friction entry (sliding contacts and pins).
-DEFAULT_FRICTION = "default"
 
 
 def friction_entries(eom: EquationsOfMotion) -> list[str]:
@@ -33,12 +33,11 @@ def default_friction(eom: EquationsOfMotion, ps=None) -> str | None:
     return getattr(ps.values, "friction_treatment", "exact") if ps is not None else "exact"
 
 
-def treatment(eom: EquationsOfMotion, ps, friction: str | None, given: dict, check_arguments: Callable,
-              **run) -> str | None:
+def treatment(eom: EquationsOfMotion, ps, friction: str | None, given: dict, **run) -> str | None:
     """The friction treatment a run takes: ``friction`` as given ('none' -> None), or the parameter set's default
     (:func:`default_friction`), whose combinations with the other arguments (``given``: the numbers checked by
-    ``check_arguments``, :func:`study.simulate.check_arguments`, passed in by its caller; ``run``: integrator,
-    friction_eps, friction_sgn, backend) are checked here, where it is known."""
+    :func:`study.run_arguments.check_arguments`; ``run``: integrator, friction_eps, friction_sgn, backend) are
+    checked here, where it is known."""
     if friction != DEFAULT_FRICTION:
         return None if friction == "none" else friction
     chosen = default_friction(eom, ps)

@@ -11,13 +11,15 @@ import numpy as np
 
 from study import arguments
 from study.errors import RunTooLargeError
-from study.friction_default import DEFAULT_FRICTION
 from study.model.eom import EquationsOfMotion
 from study.reference_data import tolerance
 from study.solver.index3 import NAME as INDEX3
 from study.solver.integrate import INTEGRATORS
 from study.solver.stabilization import Stabilization
 
+# friction= unless told otherwise: the parameter set's treatment of every friction entry (sliding contacts and pins,
+# study.friction_default).
+DEFAULT_FRICTION = "default"
 # Default output spacing [s]: 100 samples per second resolve the quick-return's crank period
 # (1 s) with 100 points and the slider-crank's slow motion with room to spare.
 DEFAULT_OUTPUT_STEP = 0.01

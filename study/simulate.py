@@ -13,15 +13,15 @@ from threadpoolctl import threadpool_limits
 from study import arguments
 from study.model.eom import EquationsOfMotion
 from study.fast.support import SCIPY_STEPS_ONLY, check_supported
-from study.friction_default import DEFAULT_FRICTION, default_friction, friction_entries, treatment
+from study.friction_default import default_friction, friction_entries, treatment
 from study.reference_data import tolerance
 from study.results import SimulationResult
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
 from study.solver.friction import DEFAULT_EPS
-from study.run_arguments import (BACKENDS, DEFAULT_ATOL, DEFAULT_OUTPUT_STEP, DEFAULT_RTOL,  # noqa: F401
-                                 EVALUATIONS_PER_STEP, FIXED_STEP, INTEGRATOR_NAMES, check_arguments,
+from study.run_arguments import (BACKENDS, DEFAULT_ATOL, DEFAULT_FRICTION,  # noqa: F401 (re-exported)
+                                 DEFAULT_OUTPUT_STEP, DEFAULT_RTOL, EVALUATIONS_PER_STEP, FIXED_STEP, INTEGRATOR_NAMES, check_arguments,
                                  check_run_size, fixed_step_evaluations, format_bytes, output_size)
 from study.solver.index3 import ALI3P, NAME as INDEX3, integrate_index3
 from study.solver.integrate import integrate
@@ -282,8 +282,7 @@ def _friction(eom: EquationsOfMotion, ps, friction, given: dict, friction_eps, f
     """The friction a run takes (:func:`study.friction_default.treatment`), its width and sgn form with their
     defaults, and what the result states about it (whether it was the default, the entries left out)."""
     by_default = friction == DEFAULT_FRICTION
-    friction = treatment(eom, ps, friction, given, check_arguments, friction_eps=friction_eps, friction_sgn=friction_sgn,
-                         **run)
+    friction = treatment(eom, ps, friction, given, friction_eps=friction_eps, friction_sgn=friction_sgn, **run)
     eps = DEFAULT_EPS if friction_eps is None else given["friction_eps"]
     sgn = "tanh" if friction_sgn is None else friction_sgn
     return friction, eps, sgn, {"friction_default": by_default,
