@@ -112,3 +112,45 @@ def dependencies(*entries: str, exclude: str | None = None) -> tuple[Path, ...]:
             todo += [m for m in files if m.startswith(name + ".")]
     parents = {m.rsplit(".", i)[0] for m in seen for i in range(1, m.count("."))}
     return tuple(sorted(files[m] for m in seen | parents))
+
+
+#: The layer drawing, bottom to top: a module may import modules of its own layer or of a layer below, never above.
+#: A name is a top-level module or package of ``study`` (a package covers its submodules); ``study`` itself (the
+#: public re-exports) is the top. The reference path (``solver``) and the compiled path (``fast``) share the laws
+#: below them (``laws``), and the reference path never imports the compiled one.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("errors", "locations", "sources", "cache_folder", "integrity", "arguments", "reference_data",
+     "reference_solutions", "imports", "progress", "output_folder", "emulate", "results", "compare"),
+    ("kernels",),
+    ("model", "params", "inline_parameters", "user_mechanism"),
+    ("laws",),
+    ("solver",),
+    ("fast",),
+    ("mechanisms", "friction_default", "run_arguments", "reactions"),
+    ("exudyn_models", "simulate"),
+    ("pipeline", "validation_plan"),
+    ("studies", "errata", "initial_report", "verify", "report", "bench", "validation", "validation_report",
+     "describe"),
+    ("cli", "cli_pipeline", "__main__", ""),
+)
+
+
+def layer_of(module: str) -> int:
+    """The layer index of a study module (by its top-level name under ``study``).
+
+    Raises
+    ------
+    KeyError
+        The module's top-level name is in no layer (a new module must be placed in the drawing).
+    """
+    top = module.split(".")[1] if "." in module else ""
+    for index, names in enumerate(LAYERS):
+        if top in names:
+            return index
+    raise KeyError(f"{module}: {top!r} is in no layer of study.imports.LAYERS")
+
+
+def upward_imports(graph: dict[str, set[str]]) -> list[str]:
+    """Every edge of ``graph`` that goes up the layer drawing, as 'a (layer) -> b (layer)'."""
+    return [f"{a} ({layer_of(a)}) -> {b} ({layer_of(b)})"
+            for a in sorted(graph) for b in sorted(graph[a]) if layer_of(b) > layer_of(a)]

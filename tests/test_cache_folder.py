@@ -1,4 +1,4 @@
-"""The cache folder (study.cache_folder) and numba's healing cache (study.fast.cache)."""
+"""The cache folder (study.cache_folder) and numba's healing cache (study.kernels.cache)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import warnings
 import pytest
 
 import study.cache_folder as cf
-from study.fast.cache import CacheDiscardedWarning
+from study.kernels.cache import CacheDiscardedWarning
 from study.sources import PACKAGE_ROOT
 
 
@@ -47,7 +47,7 @@ def test_unusable_folders_are_refused_by_variable_and_path(monkeypatch, tmp_path
     assert not (PACKAGE_ROOT / "fast" / "cache_here").exists()
 
 
-SOURCE = "from study.fast.cache import kernel\n\n@kernel()\ndef twice(x):\n    return 2.0 * x\n"
+SOURCE = "from study.kernels.cache import kernel\n\n@kernel()\ndef twice(x):\n    return 2.0 * x\n"
 
 
 def _load(path, name):

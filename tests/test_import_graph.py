@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from study.imports import PACKAGE, import_graph, imported_modules
+from study.imports import PACKAGE, import_graph, imported_modules, layer_of, upward_imports
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -60,3 +60,28 @@ def test_study_has_no_import_cycle():
     cycle = find_cycle(graph)
     if cycle:
         pytest.fail("import cycle: " + " -> ".join(cycle))
+
+
+def test_upward_import_is_found():
+    graph = {"study.solver.integrate": {"study.fast.loop"}, "study.fast.loop": {"study.solver.integrate"}}
+    assert upward_imports(graph) == ["study.solver.integrate (4) -> study.fast.loop (5)"]
+    with pytest.raises(KeyError, match="no layer"):
+        layer_of("study.nowhere")
+
+
+def test_no_import_goes_up_the_layer_drawing():
+    """The layer drawing (study.imports.LAYERS): the reference path never imports the compiled one, the laws import
+    neither, and no module imports one above its layer."""
+    graph = import_graph()
+    unplaced = sorted({m for m in graph if _unplaced(m)})
+    assert not unplaced, f"modules in no layer of study.imports.LAYERS: {unplaced}"
+    up = upward_imports(graph)
+    assert not up, "upward imports:\n" + "\n".join(up)
+
+
+def _unplaced(module: str) -> bool:
+    try:
+        layer_of(module)
+    except KeyError:
+        return True
+    return False

@@ -303,7 +303,7 @@ def test_a_new_method_is_one_class_for_both_backends():
     runs on both paths, and they agree (as the built-in methods do, tests/test_fast.py)."""
     from numba import njit
 
-    from study.fast.signatures import BIAS
+    from study.kernels.signatures import BIAS
     from study.mechanisms import initial_state, load
     from study.solver.stabilization import Baumgarte
 

@@ -3,7 +3,7 @@ along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFrict
 
 The law itself is not written here: the friction level is :func:`study.solver.friction.laws.friction_level` (and a
 pin's |R|_delta :func:`study.solver.friction.laws.pin_norm`), run as their Python source (``py_func``) as the
-reference path runs them, and the regularized sign tanh(v/eps) is ``study.fast.signs.SIGN_FUNCTIONS['tanh']``, the
+reference path runs them, and the regularized sign tanh(v/eps) is ``study.kernels.signs.SIGN_FUNCTIONS['tanh']``, the
 compiled function itself (libm's tanh, as the compiled loop; its ``py_func`` would run NumPy's tanh, which differs
 from libm's by one unit in the last place at about one argument in ten).
 """
@@ -17,7 +17,7 @@ import exudyn as exu
 
 from study.exudyn_models.building import Model
 from study.exudyn_models.settings import SEED_MAX_ITERATIONS, SEED_TOLERANCE
-from study.fast.signs import SIGN_FUNCTIONS
+from study.kernels.signs import SIGN_FUNCTIONS
 from study.solver.friction.laws import friction_level, pin_norm
 
 OVT = exu.OutputVariableType

@@ -1,21 +1,11 @@
 """Compiled fast path: numba kernels on code generated from the same sympy CSE output as the reference.
 
-``simulate(..., backend='compiled')`` runs here. Modules, one concern each:
+``simulate(..., backend='compiled')`` runs here; the compiling machinery (cache, signatures, sgn kernels, LU) is
+``study.kernels``. Modules, one concern each:
 
-cache
-    Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``, checked before
-    use, with entries that heal (``kernel``, numba's ``njit`` with that cache).
-signatures
-    The numba function types shared by the generated code, the stabilization methods, the friction
-    treatments and the kernels.
-signs
-    The sgn approximations by name, one numba function each for both backends (sliding-mode bias,
-    friction laws).
 codegen
     sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``);
     the load laws are the description's expressions, compiled with the rest.
-linalg
-    Small dense LU with partial pivoting.
 user
     A user's EquationsOfMotion compiled from its callables.
 dynamics
@@ -30,14 +20,14 @@ frontend
     and result assembly are the reference's (``study.solver.run``, ``study.solver.assemble``).
 """
 
-from study.fast import cache as _cache
+from study.kernels import cache as _cache
 
 __all__ = ["CompiledModel", "compiled_model", "compiled_rhs", "simulate_compiled"]
 
 
 def __getattr__(name: str):
     """The frontend's names, imported when first asked for: the compiled forms of the stabilization methods and
-    friction treatments (study.solver) import study.fast.signs and .signatures, and the frontend imports them."""
+    friction treatments (study.solver) import study.kernels.signs and .signatures, and the frontend imports them."""
     if name in __all__:
         _cache.check()   # a cache folder that cannot be used is refused before the entry kernels compile or load
         from study.fast import frontend

@@ -31,9 +31,9 @@ from collections import namedtuple
 import numpy as np
 from numba import types
 
-from study.fast.cache import internal, kernel
-from study.fast.linalg import lu_factor, lu_solve
-from study.fast.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
+from study.kernels.cache import internal, kernel
+from study.kernels.linalg import lu_factor, lu_solve
+from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
 from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
 from study.solver.friction.contact import PIN_MAX_ITERATIONS  # the same bound on the pins' Newton iterations
 from study.solver.friction.laws import friction_level, pin_norm  # each written once for both backends

@@ -25,18 +25,17 @@ from numba.core.typing.typeof import typeof_impl
 from numba.experimental.function_type import _get_wrapper_address
 
 from study.errors import NonFiniteError, RunBoundError
-from study.fast.cache import check, compile_lock
+from study.kernels.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
 from study.fast.dynamics import (ACCELERATIONS_ENTRY, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry, no_phases,
                                  rhs_entry)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
                              FAIL_STEP, SEGMENT, integrate_segment)
-from study.fast.signatures import BIAS, EVALUATE, PHASES
+from study.kernels.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
 from study.model.eom import EquationsOfMotion
-from study.mechanisms import Mechanism
 from study.model.coordinates import lower
 from study.reference_data import tolerance
 from study.results import SimulationResult
@@ -84,7 +83,7 @@ class CompiledModel:
     work_names: tuple[str, ...]
 
 
-_MODELS: dict[Mechanism, CompiledModel] = {}
+_MODELS: dict[object, CompiledModel] = {}
 _USER_MODELS: dict[int, tuple[EquationsOfMotion, CompiledModel]] = {}   # id -> (the equations, kept alive; model)
 
 
@@ -97,7 +96,7 @@ def user_model(eom: EquationsOfMotion) -> CompiledModel:
     return _USER_MODELS[id(eom)][1]
 
 
-def compiled_model(mechanism: Mechanism) -> CompiledModel:
+def compiled_model(mechanism) -> CompiledModel:
     """The compiled model of a mechanism's description in relative coordinates (generated once, then from disk)."""
     if mechanism not in _MODELS:
         b = lower(mechanism.description, "relative")
@@ -118,7 +117,7 @@ def compiled_bias(stabilization: Stabilization):
     if cls.__dict__.get("compiled_bias") is None:
         raise ValueError(f"backend='compiled': the stabilization {cls.__name__} (name {stabilization.name!r}) does "
                          f"not define its own compiled_bias (the compiled form of its bias, signature "
-                         f"study.fast.signatures.BIAS) and compiled_parameters; define them in the class, or use "
+                         f"study.kernels.signatures.BIAS) and compiled_parameters; define them in the class, or use "
                          f"backend='reference'")
     return cls.compiled_bias
 
@@ -173,7 +172,7 @@ class Setup:
     phases: object   # the friction treatment's compiled_phases (no_phases without friction)
 
 
-def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
+def setup(eom: EquationsOfMotion, mechanism, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
     """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays.
 
@@ -186,10 +185,10 @@ def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: 
                  compiled_phases(dyn))
 
 
-def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
+def _pack(eom: EquationsOfMotion, mechanism,
           dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
     """The compiled model of the equations (of ``mechanism``'s description, else of ``eom``'s callables) and the
-    option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.fast.cache.check``):
+    option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.kernels.cache.check``):
     a run whose compiled code could not be saved is refused before anything is written."""
     check()
     model = user_model(eom) if mechanism is None else compiled_model(mechanism)
@@ -228,7 +227,7 @@ def _typeof_function_address(value: FunctionAddress, context):
     return value.numba_type
 
 
-def compiled_rhs(eom: EquationsOfMotion, mechanism: Mechanism | None, dyn: Dynamics):
+def compiled_rhs(eom: EquationsOfMotion, mechanism, dyn: Dynamics):
     """``dyn.rhs`` evaluated by the compiled kernels, for scipy's integrators (Radau, LSODA) on the reference loop.
 
     Same signature (t, y, mode) and the same count of evaluations in ``dyn.nfev``. Where the compiled solve fails,
@@ -372,7 +371,7 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     return t_out[:k].copy(), y_out[:k].copy(), modes, stats
 
 
-def simulate_compiled(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, t_end: float, *, method: str,
+def simulate_compiled(eom: EquationsOfMotion, mechanism, q0, qd0, t_end: float, *, method: str,
                       integrator: str, rtol: float, atol: float, step, output_step: float,
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
                       max_evaluations: float, min_step: float, **method_options) -> SimulationResult:

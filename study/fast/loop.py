@@ -19,11 +19,11 @@ from __future__ import annotations
 import numpy as np
 from numba import types
 
-from study.fast.cache import internal, kernel
+from study.kernels.cache import internal, kernel
 from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, accelerations,
                                  dimensions, note_failure, pin_block, rhs, workspace)
 from study.fast.project import project
-from study.fast.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
+from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
 from study.solver.friction.laws import friction_level  # a stuck entry's limit, as the reference

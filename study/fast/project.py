@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from study.fast.cache import internal
+from study.kernels.cache import internal
 from study.fast.dynamics import CF_PROJ_TOL, CI_PROJ_MASS, CI_PROJ_MAXITER
-from study.fast.linalg import lu_factor, lu_solve
+from study.kernels.linalg import lu_factor, lu_solve
 
 OK, SINGULAR, NOT_CONVERGED = 0, 1, 4
 

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.integrate import DOP853, RK23, RK45
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
-from study.fast.cache import internal
+from study.kernels.cache import internal
 from study.fast.dynamics import rhs
 from study.fast.support import METHOD_IDS
 

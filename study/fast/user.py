@@ -3,7 +3,7 @@
 A described mechanism's kernels are generated from its description (:mod:`study.fast.codegen`). A
 user's equations have none: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
 as they are and wrapped into kernels of the generated ones' signatures
-(:mod:`study.fast.signatures`), so the same compiled loop runs them. The callables must be in the
+(:mod:`study.kernels.signatures`), so the same compiled loop runs them. The callables must be in the
 subset of Python and NumPy that numba compiles (numbers, arrays and math; closures over plain
 numbers, not over objects). Anything else is refused with one message that says why and names
 ``backend='reference'``, which runs every EquationsOfMotion: there is no silent fallback.
@@ -20,8 +20,8 @@ from types import SimpleNamespace
 from numba import njit
 from numba.core.errors import NumbaError
 
-from study.fast.cache import kernel
-from study.fast.signatures import EVALUATE, INDICATORS, KINEMATICS
+from study.kernels.cache import kernel
+from study.kernels.signatures import EVALUATE, INDICATORS, KINEMATICS
 from study.model.eom import EquationsOfMotion, _no_forces
 
 

@@ -9,12 +9,12 @@ constraint dynamics (Phi_ddot = Phi_q qdd - gamma):
 - ``projection``:   b = 0, and after every accepted step q is projected onto Phi = 0 and qd onto
                     Phi_q qd = 0 (minimum-norm or mass-weighted Gauss-Newton).
 
-The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17; ``study.fast.signs``, one
+The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17; ``study.kernels.signs``, one
 numba function each for both backends).
 
 Each method is one class for both backends: ``bias`` is its reference (NumPy) form, and
 ``compiled_bias`` its compiled counterpart, a numba function of signature
-``study.fast.signatures.BIAS`` that the compiled loop calls with the parameters
+``study.kernels.signatures.BIAS`` that the compiled loop calls with the parameters
 ``compiled_parameters(r)`` packed into its options (``study.fast.frontend.pack_options``). A new
 method (or a subclass that changes ``bias``) runs compiled once its class defines both; a class that
 does not define its own ``compiled_bias`` is refused by name on the compiled path.
@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from study import arguments
-from study.fast.cache import kernel
-from study.fast.signatures import BIAS
-from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
+from study.kernels.cache import kernel
+from study.kernels.signatures import BIAS
+from study.kernels.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 from study.reference_data import tolerance
 
 from study.model.eom import EquationsOfMotion
@@ -55,7 +55,7 @@ class Stabilization:
 
     name = ""
     projects = False
-    compiled_bias = None   # the compiled form of bias (signature study.fast.signatures.BIAS), per class
+    compiled_bias = None   # the compiled form of bias (signature study.kernels.signatures.BIAS), per class
 
     def bias(self, phi: Array, phidot: Array) -> Array:
         return np.zeros_like(phi)

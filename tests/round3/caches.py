@@ -39,7 +39,7 @@ def _own_cache(tmp: Path) -> Path:
     """A private copy of the shared numba cache (warmed first by a compiled run in this process)."""
     from study.simulate import simulate
 
-    from study.fast.cache import SOURCE_HASH
+    from study.kernels.cache import SOURCE_HASH
 
     simulate("quick_return", t_end=0.01, backend="compiled")
     own = tmp / "own_cache"
@@ -73,7 +73,7 @@ def _healed(out: subprocess.CompletedProcess, damaged: Path) -> None:
 
 def _entry(cache: Path, pattern: str) -> Path:
     """The entry of the current code (the folder of the fast path's source hash)."""
-    from study.fast.cache import SOURCE_HASH
+    from study.kernels.cache import SOURCE_HASH
 
     found = sorted((cache / "numba" / SOURCE_HASH).rglob(pattern))
     assert found, f"no cache entry {pattern} under {cache}"

@@ -11,9 +11,9 @@ Treatments, by name (``FRICTION_TREATMENTS``):
 
 Each treatment is one class for both backends: ``phases`` gives the contacts' stick flags and slip
 factors s (f = -s (R + mu_k |N|) in slip) on the reference path, and ``compiled_phases`` is the same law
-for the compiled path, a numba function of signature ``study.fast.signatures.PHASES`` that reads the
+for the compiled path, a numba function of signature ``study.kernels.signatures.PHASES`` that reads the
 numbers ``compiled_parameters()`` at its offset in the compiled options (``study.fast.frontend.pack_options``).
-The slip factors of 'regularized' and 'sign' are ``study.fast.signs`` functions, the same on both paths.
+The slip factors of 'regularized' and 'sign' are ``study.kernels.signs`` functions, the same on both paths.
 
 Paper 000 says only that R (its F) "opposes the slider's motion"; whether it also resists the onset of
 motion, i.e. counts as static holding capacity, is an open assumption. ``RESISTANCE_READINGS`` names
@@ -33,9 +33,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from study.fast.cache import kernel
-from study.fast.signatures import PHASES
-from study.fast.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
+from study.kernels.cache import kernel
+from study.kernels.signatures import PHASES
+from study.kernels.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
 
 Array = np.ndarray
 

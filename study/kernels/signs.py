@@ -1,6 +1,6 @@
 """The sgn approximations of 001 (after eq. 17) by name, each written once for both backends.
 
-``SIGN_FUNCTIONS[name]`` is a numba function f(s, width) (signature ``study.fast.signatures.SIGN``) whose
+``SIGN_FUNCTIONS[name]`` is a numba function f(s, width) (signature ``study.kernels.signatures.SIGN``) whose
 body is NumPy: the compiled laws (the sliding-mode bias, the friction treatments' slip factors) call it
 on scalars through :func:`sign_function`, and the reference path runs the same source on arrays with
 NumPy (:func:`apply`). Each path keeps its own elementary functions: libm's tanh and arctan compiled,
@@ -15,8 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
-from study.fast.cache import kernel
-from study.fast.signatures import SIGN
+from study.kernels.cache import kernel
+from study.kernels.signatures import SIGN
 
 
 @kernel(SIGN)

@@ -25,7 +25,7 @@ BIAS = types.void(V1, V1, V1, i8, V1)
 #: phases(mode, n_load_modes, v_t, cf, offset, stick, s): a friction treatment's stick flags and slip factors of
 #: the contacts, its parameters at cf[offset:]
 PHASES = types.void(I1, i8, V1, V1, i8, B1, V1)
-#: sgn(s, width): an approximation of sgn (study.fast.signs)
+#: sgn(s, width): an approximation of sgn (study.kernels.signs)
 SIGN = f8(f8, f8)
 
 EVALUATE_T = types.FunctionType(EVALUATE)

@@ -7,7 +7,7 @@ call and allocation cost of LAPACK at this size. Partial pivoting is what LAPACK
 
 from __future__ import annotations
 
-from study.fast.cache import internal
+from study.kernels.cache import internal
 
 
 @internal()

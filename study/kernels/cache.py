@@ -30,7 +30,7 @@ from study.cache_folder import CacheFolderError, cache_dir, configured_cache_dir
 from study.sources import source_files, source_hash
 
 # Every module of the fast path, and the reference modules whose constants its kernels compile in.
-_SOURCES = ("fast", "solver/friction", "solver/integrate.py")
+_SOURCES = ("kernels", "laws", "fast", "solver/friction", "solver/integrate.py", "solver/stabilization.py")
 SOURCE_HASH = source_hash(source_files(*_SOURCES))[:12]
 
 
