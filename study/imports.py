@@ -123,6 +123,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
      "reference_solutions", "imports", "progress", "output_folder", "emulate", "results", "compare"),
     ("kernels",),
     ("model", "params", "inline_parameters", "user_mechanism"),
+    ("spatial",),
     ("laws",),
     ("solver",),
     ("fast",),

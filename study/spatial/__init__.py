@@ -1,0 +1,16 @@
+"""Spatial mechanisms: rigid bodies in 3D with Euler parameters, their joints and loads, through the same solver.
+
+* :mod:`~study.spatial.rotations`: E(p), G(p), A(p) of the Euler parameters;
+* :mod:`~study.spatial.elements`, :mod:`~study.spatial.description`: the description (bodies, joints, loads), each
+  value checked as it enters (:class:`SpatialDescriptionError`);
+* :mod:`~study.spatial.joints`, :mod:`~study.spatial.derive`: the symbolic equations in r (3) and p (4) per body;
+* :mod:`~study.spatial.equations`: those equations as the solver's EquationsOfMotion;
+* :mod:`~study.spatial.initial`: the consistent initial state from angular velocities per body.
+"""
+
+from study.spatial.description import SpatialDescription
+from study.spatial.elements import GROUND, SpatialDescriptionError
+from study.spatial.equations import spatial_equations
+from study.spatial.initial import initial_state
+
+__all__ = ["GROUND", "SpatialDescription", "SpatialDescriptionError", "initial_state", "spatial_equations"]

@@ -1,0 +1,203 @@
+"""Joint-level description of a spatial mechanism: rigid bodies in 3D, their joints and loads.
+
+Every body has the redundant coordinates of the seeds (Nikravesh; Haug): its centre of mass r = (x, y, z) in the
+global frame and its orientation by four Euler parameters p = (e0, e1, e2, e3), held on p^T p = 1 by one more
+constraint row per body (:mod:`study.spatial.derive`). Points and axes of a body are given in its body frame (origin
+at the centre of mass); a ground point or axis is a global 3-tuple in place of a name.
+
+Every value is checked where it enters: a body's mass must be finite and > 0, its inertia tensor (three principal
+moments or a full 3 x 3 matrix) symmetric positive definite and physical (each principal moment at most the sum of
+the other two), a point or axis a real 3-vector, an axis not zero. A wrong value raises one
+:class:`~study.spatial.elements.SpatialDescriptionError` naming it, its owner and what is wrong. A planar description
+(:class:`study.model.joints.Description`) is a different type: nothing here takes one (:func:`spatial_only`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import sympy as sp
+
+from study.reference_data import tolerance
+from study.spatial.elements import (GROUND, FixedJoint, PointLoad, Revolute, RigidBody, SpatialDescriptionError,
+                                    Spherical, TorqueLoad)
+
+FRAMES = ("global", "body")
+
+
+def real_vector(value: Any, length: int, what: str) -> np.ndarray:
+    """``value`` as a finite real vector of ``length`` entries, or a SpatialDescriptionError naming ``what``."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SpatialDescriptionError(f"{what} = {value!r} is not a vector of {length} real numbers") from None
+    if array.shape != (length,):
+        shape = "a number" if array.ndim == 0 else f"{array.size} entries"
+        raise SpatialDescriptionError(f"{what} = {value!r} has {shape}; a spatial {what.split()[0]} needs {length}"
+                                      + (" (a planar value?)" if array.shape == (length - 1,) else ""))
+    if not np.isfinite(array).all():
+        raise SpatialDescriptionError(f"{what} = {value!r} is not finite")
+    return array
+
+
+def unit_axis(value: Any, what: str) -> np.ndarray:
+    """A nonzero 3-vector, normalized; a zero axis is refused (it has no direction)."""
+    axis = real_vector(value, 3, what)
+    norm = float(np.linalg.norm(axis))
+    if norm <= tolerance("spatial_zero_axis"):
+        raise SpatialDescriptionError(f"{what} = {value!r} is a zero vector (|axis| = {norm:.3g}): an axis needs a "
+                                      f"direction")
+    return axis / norm
+
+
+def inertia_tensor(value: Any, what: str) -> np.ndarray:
+    """Three principal moments or a full 3 x 3 tensor -> a symmetric positive-definite, physical 3 x 3 matrix."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SpatialDescriptionError(f"{what} = {value!r} is not real numbers") from None
+    if array.shape == (3,):
+        array = np.diag(array)
+    if array.shape != (3, 3) or not np.isfinite(array).all():
+        raise SpatialDescriptionError(f"{what} = {value!r} must be 3 principal moments or a finite 3 x 3 tensor"
+                                      + (" (a planar body's scalar inertia?)" if array.ndim == 0 else ""))
+    scale = float(np.max(np.abs(array)))
+    if np.max(np.abs(array - array.T)) > tolerance("round_off") * scale:
+        raise SpatialDescriptionError(f"{what} = {array.tolist()} is not symmetric")
+    moments = np.linalg.eigvalsh(array)
+    if not moments.min() > 0:
+        raise SpatialDescriptionError(f"{what} = {array.tolist()} is not positive definite: principal moments "
+                                      f"{moments.tolist()} (each must be > 0)")
+    if moments[2] > (moments[0] + moments[1]) * (1 + tolerance("round_off")):
+        raise SpatialDescriptionError(f"{what} = {array.tolist()} is not a rigid body's: its largest principal "
+                                      f"moment {moments[2]:.6g} exceeds the sum of the other two {moments[:2].tolist()}")
+    return array
+
+
+def load_components(value: Any, t: sp.Symbol, what: str) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
+    """Three sympy expressions of time ``t`` only (numbers included)."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+        raise SpatialDescriptionError(f"{what} = {value!r} must be 3 components (numbers or expressions of t)")
+    exprs = tuple(sp.sympify(v) for v in value)
+    stray = sorted(str(s) for e in exprs for s in e.free_symbols if s != t)
+    if stray:
+        raise SpatialDescriptionError(f"{what} = {value!r} uses {stray}: a load here depends on time t only")
+    return exprs
+
+
+def spatial_only(d: Any) -> "SpatialDescription":
+    """``d`` if it is a SpatialDescription; a planar description (or anything else) is refused, never converted."""
+    if not isinstance(d, SpatialDescription):
+        kind = type(d).__name__
+        raise SpatialDescriptionError(f"{getattr(d, 'name', d)!r} is a {kind}, not a SpatialDescription: a planar "
+                                      f"description runs through study.model, never silently as a spatial one")
+    return d
+
+
+class SpatialDescription:
+    """Collect a spatial mechanism: bodies, joints and loads, each checked as it is added.
+
+    Parameters
+    ----------
+    name : str
+    label : str, optional
+        A human-readable name for reports.
+    """
+
+    def __init__(self, name: str, label: str = ""):
+        if not isinstance(name, str) or not name.isidentifier():
+            raise SpatialDescriptionError(f"mechanism name {name!r} must be an identifier")
+        self.name = name
+        self.label = label or name
+        self.t = sp.Symbol("t", real=True)
+        self.bodies: dict[str, RigidBody] = {}
+        self.joints: list[Spherical | Revolute | FixedJoint] = []
+        self.loads: list[PointLoad | TorqueLoad] = []
+        self.gravity_vector = np.zeros(3)
+        self._names: set[str] = set()
+
+    def _claim(self, kind: str, name: str) -> None:
+        if not isinstance(name, str) or not name.isidentifier() or name == GROUND:
+            raise SpatialDescriptionError(f"{self.name}: {kind} name {name!r} must be an identifier other than "
+                                          f"{GROUND!r}")
+        if name in self._names:
+            raise SpatialDescriptionError(f"{self.name}: the name {name!r} ({kind}) is used twice")
+        self._names.add(name)
+
+    def body(self, name: str, mass: float, inertia: Any, points: Mapping[str, Sequence[float]] | None = None,
+             axes: Mapping[str, Sequence[float]] | None = None) -> RigidBody:
+        """A rigid body; ``inertia`` at the centre of mass in the body frame (3 principal moments or 3 x 3)."""
+        self._claim("body", name)
+        m = real_vector([mass], 1, f"mass of body {name!r}")[0]
+        if not m > 0:
+            raise SpatialDescriptionError(f"mass of body {name!r} = {mass!r} must be > 0")
+        body = RigidBody(name=name, mass=float(m), inertia=inertia_tensor(inertia, f"inertia of body {name!r}"),
+                         points={k: tuple(real_vector(v, 3, f"point {k!r} of body {name!r}"))
+                                 for k, v in (points or {}).items()},
+                         axes={k: tuple(unit_axis(v, f"axis {k!r} of body {name!r}")) for k, v in (axes or {}).items()})
+        self.bodies[name] = body
+        return body
+
+    def _point(self, joint: str, body: str, point: Any) -> str | tuple:
+        if body == GROUND:
+            return tuple(real_vector(point, 3, f"ground point of joint {joint!r}"))
+        if body not in self.bodies:
+            raise SpatialDescriptionError(f"joint {joint!r}: no body {body!r} (bodies: {sorted(self.bodies)})")
+        if point not in self.bodies[body].points:
+            raise SpatialDescriptionError(f"joint {joint!r}: body {body!r} has no point {point!r} (points: "
+                                          f"{sorted(self.bodies[body].points)})")
+        return point
+
+    def _axis(self, joint: str, body: str, axis: Any) -> str | tuple:
+        if body == GROUND:
+            return tuple(unit_axis(axis, f"ground axis of joint {joint!r}"))
+        if axis not in self.bodies[body].axes:
+            raise SpatialDescriptionError(f"joint {joint!r}: body {body!r} has no axis {axis!r} (axes: "
+                                          f"{sorted(self.bodies[body].axes)})")
+        return axis
+
+    def _pair(self, name: str, a: tuple[str, Any], b: tuple[str, Any]) -> tuple:
+        self._claim("joint", name)
+        if a[0] == b[0]:
+            raise SpatialDescriptionError(f"joint {name!r} joins {a[0]!r} to itself")
+        return a[0], self._point(name, *a), b[0], self._point(name, *b)
+
+    def spherical(self, name: str, a: tuple[str, Any], b: tuple[str, Any]) -> None:
+        """Point a[1] of body a[0] coincides with point b[1] of body b[0] (either body may be GROUND)."""
+        self.joints.append(Spherical(name, *self._pair(name, a, b)))
+
+    def revolute(self, name: str, a: tuple[str, Any, Any], b: tuple[str, Any, Any]) -> None:
+        """A spherical joint at (body, point) a and b whose axes a[2] and b[2] stay parallel."""
+        body_a, pa, body_b, pb = self._pair(name, a[:2], b[:2])
+        self.joints.append(Revolute(name, body_a, pa, self._axis(name, body_a, a[2]), body_b, pb,
+                                    self._axis(name, body_b, b[2])))
+
+    def fixed(self, name: str, a: tuple[str, Any], b: tuple[str, Any], orientation: Any = None) -> None:
+        """Weld a's body to b's (or to ground): the points coincide, the relative rotation stays ``orientation``."""
+        pair = self._pair(name, a, b)
+        c = np.eye(3) if orientation is None else np.array(orientation, dtype=float)
+        if c.shape != (3, 3) or not np.isfinite(c).all() or \
+                np.max(np.abs(c.T @ c - np.eye(3))) > tolerance("spatial_rotation_orthogonality") or \
+                np.linalg.det(c) <= 0:
+            raise SpatialDescriptionError(f"orientation of joint {name!r} = {orientation!r} is not a rotation matrix")
+        self.joints.append(FixedJoint(name, *pair, orientation=c))
+
+    def gravity(self, g: Sequence[float]) -> None:
+        """Uniform gravity, the global acceleration vector g (a potential m g . r per body)."""
+        self.gravity_vector = real_vector(g, 3, "gravity vector")
+
+    def force(self, name: str, body: str, point: str, components: Sequence) -> None:
+        """A force (global components, numbers or expressions of ``self.t``) at a point of a body."""
+        self._claim("load", name)
+        self._point(name, body, point)
+        self.loads.append(PointLoad(name, body, point, load_components(components, self.t, f"force {name!r}")))
+
+    def torque(self, name: str, body: str, components: Sequence, frame: str = "global") -> None:
+        """A torque on a body, its components in the 'global' or the 'body' frame."""
+        self._claim("load", name)
+        if body not in self.bodies:
+            raise SpatialDescriptionError(f"torque {name!r}: no body {body!r} (bodies: {sorted(self.bodies)})")
+        if frame not in FRAMES:
+            raise SpatialDescriptionError(f"torque {name!r}: frame = {frame!r} must be one of {FRAMES}")
+        self.loads.append(TorqueLoad(name, body, load_components(components, self.t, f"torque {name!r}"), frame))

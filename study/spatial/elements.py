@@ -1,0 +1,92 @@
+"""The parts of a spatial mechanism's description, as data: rigid bodies, joints, loads, and the error bad input
+gets (:class:`~study.spatial.description.SpatialDescription` makes them and checks every number on the way in)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+import sympy as sp
+
+from study.model.elements import GROUND, DescriptionError
+
+__all__ = ["GROUND", "FixedJoint", "PointLoad", "Revolute", "RigidBody", "SpatialDescriptionError", "Spherical",
+           "TorqueLoad"]
+
+Vector = tuple[float, float, float]
+
+
+class SpatialDescriptionError(DescriptionError):
+    """A spatial description (or its initial state) is wrong: the message names the value, its owner and why."""
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """A rigid body: mass, the inertia tensor at its centre of mass in its body frame (3 x 3, symmetric positive
+    definite), named local points and unit axes (body frame, origin at the centre of mass)."""
+
+    name: str
+    mass: float
+    inertia: np.ndarray
+    points: Mapping[str, Vector] = field(default_factory=dict)
+    axes: Mapping[str, Vector] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Spherical:
+    """Point ``a`` of body ``body_a`` coincides with point ``b`` of ``body_b`` (3 rows). A ground point is its
+    global coordinates (a 3-tuple) in place of a point name."""
+
+    name: str
+    body_a: str
+    a: str | Vector
+    body_b: str
+    b: str | Vector
+
+
+@dataclass(frozen=True)
+class Revolute:
+    """A spherical joint (3 rows) whose two axes stay parallel (2 rows): ``axis_a`` of body_a along ``axis_b`` of
+    body_b (each an axis name, or a global unit 3-tuple on ground)."""
+
+    name: str
+    body_a: str
+    a: str | Vector
+    axis_a: str | Vector
+    body_b: str
+    b: str | Vector
+    axis_b: str | Vector
+
+
+@dataclass(frozen=True)
+class FixedJoint:
+    """A spherical joint (3 rows) with the relative rotation locked (3 rows): body_a's frame stays at
+    A_b C, C = ``orientation`` (3 x 3, body_b's frame -> body_a's frame at rest; the identity by default)."""
+
+    name: str
+    body_a: str
+    a: str | Vector
+    body_b: str
+    b: str | Vector
+    orientation: np.ndarray
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """A force (global components, sympy expressions of time t) at point ``point`` of ``body``."""
+
+    name: str
+    body: str
+    point: str
+    components: tuple[sp.Expr, sp.Expr, sp.Expr]
+
+
+@dataclass(frozen=True)
+class TorqueLoad:
+    """A torque on ``body`` (components of time t) in the ``frame`` 'global' or 'body'."""
+
+    name: str
+    body: str
+    components: tuple[sp.Expr, sp.Expr, sp.Expr]
+    frame: str

@@ -1,0 +1,101 @@
+"""The consistent initial state of a spatial mechanism from each body's position, Euler parameters and angular
+velocity.
+
+Positions: each body's Euler parameters must be within ``spatial_euler_norm_start`` (reference/tolerances.toml) of
+unit norm (a larger deviation is not rounding but a wrong value, refused by name); then Newton's method on all
+constraint rows (the joints' and the norm rows), with the minimum-norm correction, brings q onto Phi(q) = 0.
+Velocities: each body's angular velocity, given in the 'global' or the 'body' frame, sets its Euler-parameter rates
+p_dot = 1/2 E^T omega = 1/2 G^T omega' (:mod:`study.spatial.rotations`); the centres' velocities (given ones as the
+start) are corrected by the least change that satisfies Phi_q qd = 0 with the rates held. If no such change exists
+(the angular velocities violate a joint, e.g. a turn about a revolute joint's crossing axis) the start is refused.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from study.model.eom import EquationsOfMotion
+from study.reference_data import tolerance
+from study.spatial.description import FRAMES, SpatialDescription, real_vector, spatial_only
+from study.spatial.elements import SpatialDescriptionError
+from study.spatial.rotations import e_matrix, g_matrix
+
+NEWTON_MAX_ITER = 20
+
+
+def euler_rates(p: np.ndarray, omega: np.ndarray, frame: str) -> np.ndarray:
+    """p_dot = 1/2 E(p)^T omega (global frame) or 1/2 G(p)^T omega' (body frame)."""
+    matrix = e_matrix(list(p)) if frame == "global" else g_matrix(list(p))
+    return 0.5 * np.array(matrix.T.tolist(), dtype=float) @ omega
+
+
+def _start(d: SpatialDescription, positions, orientations, angular_velocities, velocities):
+    """q (unassembled), the centres' velocities and the angular velocities, each checked."""
+    q, v, w = [], [], []
+    for name in d.bodies:
+        p = real_vector(orientations.get(name, (1, 0, 0, 0)), 4, f"Euler parameters of body {name!r}")
+        off = abs(float(np.linalg.norm(p)) - 1)
+        if off > tolerance("spatial_euler_norm_start"):
+            raise SpatialDescriptionError(f"Euler parameters of body {name!r} = {p.tolist()} have norm "
+                                          f"{np.linalg.norm(p):.6g}, not 1 (| |p| - 1 | = {off:.3g} > "
+                                          f"{tolerance('spatial_euler_norm_start'):g}): not a rotation")
+        if name not in positions:
+            raise SpatialDescriptionError(f"no initial position of body {name!r} (positions: {sorted(positions)})")
+        r = real_vector(positions[name], 3, f"position of body {name!r}")
+        w.append(real_vector(angular_velocities.get(name, (0, 0, 0)), 3, f"angular velocity of body {name!r}"))
+        v.append(real_vector(velocities.get(name, (0, 0, 0)), 3, f"velocity of body {name!r}"))
+        q += [*r, *p]
+    return np.array(q), v, w
+
+
+def _newton(eom: EquationsOfMotion, q: np.ndarray) -> np.ndarray:
+    tol = tolerance("spatial_newton")
+    for _ in range(NEWTON_MAX_ITER):
+        phi = eom.phi(q)
+        if np.max(np.abs(phi), initial=0.0) <= tol:
+            return q
+        q = q - np.linalg.lstsq(eom.phi_q(q), phi, rcond=None)[0]
+    worst = int(np.argmax(np.abs(eom.phi(q))))
+    raise SpatialDescriptionError(f"{eom.name}: the initial positions cannot be assembled: after {NEWTON_MAX_ITER} "
+                                  f"Newton steps {eom.constraint_names[worst]} = {eom.phi(q)[worst]:.3g} (tolerance "
+                                  f"{tol:g})")
+
+
+def _velocities(eom: EquationsOfMotion, q: np.ndarray, v: list, w: list, frame: str) -> np.ndarray:
+    qd = np.concatenate([np.concatenate([v_i, euler_rates(q[7 * i + 3:7 * i + 7], w_i, frame)])
+                         for i, (v_i, w_i) in enumerate(zip(v, w))])
+    jac = eom.phi_q(q)
+    translations = np.array([7 * i + k for i in range(len(v)) for k in range(3)])
+    qd[translations] -= np.linalg.lstsq(jac[:, translations], jac @ qd, rcond=None)[0]
+    residual = jac @ qd
+    if not residual.size:
+        return qd
+    worst = int(np.argmax(np.abs(residual)))
+    if abs(residual[worst]) > tolerance("spatial_newton") * max(1.0, float(np.max(np.abs(qd)))):
+        raise SpatialDescriptionError(f"{eom.name}: the initial angular velocities violate the joints: the velocity "
+                                      f"of {eom.constraint_names[worst]} stays {residual[worst]:.3g} whatever the "
+                                      f"centres' velocities")
+    return qd
+
+
+def initial_state(d: SpatialDescription, eom: EquationsOfMotion, positions: Mapping[str, Sequence[float]],
+                  orientations: Mapping[str, Sequence[float]] | None = None,
+                  angular_velocities: Mapping[str, Sequence[float]] | None = None, frame: str = "global",
+                  velocities: Mapping[str, Sequence[float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(q0, qd0) on Phi = 0 and Phi_q qd = 0, by body name: centres, Euler parameters (default: no rotation),
+    angular velocities in ``frame`` ('global' or 'body'; default zero) and centres' velocities (default zero)."""
+    d = spatial_only(d)
+    if frame not in FRAMES:
+        raise SpatialDescriptionError(f"frame = {frame!r} of the angular velocities must be one of {FRAMES}")
+    given = {"positions": positions, "orientations": orientations or {}, "angular_velocities": angular_velocities or {},
+             "velocities": velocities or {}}
+    for what, mapping in given.items():
+        unknown = sorted(set(mapping) - set(d.bodies))
+        if unknown:
+            raise SpatialDescriptionError(f"{what} name bodies {unknown} that {d.name!r} does not have "
+                                          f"(bodies: {sorted(d.bodies)})")
+    q, v, w = _start(d, positions, given["orientations"], given["angular_velocities"], given["velocities"])
+    q = _newton(eom, q)
+    return q, _velocities(eom, q, v, w, frame)
