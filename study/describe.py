@@ -12,7 +12,7 @@ import numpy as np
 import sympy as sp
 
 from study import mechanisms
-from study.mechanisms import Mechanism
+from study.model import Mechanism
 from study.model.coordinates import joint_rows, poses
 from study.model.joints import Description, Distance, Prismatic
 from study.params import ParameterSet, available_variants, load_parameters
