@@ -36,7 +36,7 @@ def _point(ref: tuple[str, str]) -> str:
 def describe_text(mechanism: str | Mechanism, variant: str = "seed") -> str:
     """A mechanism's description as a plain-text page: a study mechanism by name (variant ``variant``), or a
     :class:`study.Mechanism` (its own parameter set)."""
-    mech = mechanisms.mechanism(load_parameters(mechanism, variant)) if isinstance(mechanism, str) else mechanism
+    mech = mechanisms.named_mechanism(mechanism, variant) if isinstance(mechanism, str) else mechanism
     ps, d = mech.parameters, mech.description
     name, variant, folder = ps.mechanism, ps.variant, ps.path.parent
     show = _readable(d)
