@@ -2,8 +2,8 @@
 
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError, RunTooLargeError,
                           SimulationError, SingularConfigurationError)
-from study.mechanisms import Mechanism, consistent_state, equations_of
-from study.model import EquationsOfMotion, MechanismBuilder, SlidingContact
+from study.model import EquationsOfMotion, Mechanism, SlidingContact
+from study.model.mechanism import consistent_state, equations_of
 from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterError, ParameterSet, load_parameters
 from study.results import SimulationResult
@@ -17,7 +17,6 @@ __all__ = [
     "EquationsOfMotion",
     "Friction",
     "Mechanism",
-    "MechanismBuilder",
     "NonFiniteError",
     "ParameterError",
     "ParameterSet",
@@ -43,7 +42,7 @@ __all__ = [
 # Imported when first used: Exudyn (and the report's plotting) load only for what needs them.
 _LAZY = {"exudyn_run": ("study.exudyn_models", "run"), "joint_reactions": ("study.reactions", "joint_reactions"),
          "validate": ("study.validation", "validate"), "ValidationSettings": ("study.validation", "Settings"),
-         "load_mechanism": ("study.mechanisms", "load_mechanism")}
+         "load_mechanism": ("study.user_mechanism", "load_mechanism")}
 
 
 def __getattr__(name: str):

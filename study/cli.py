@@ -89,7 +89,7 @@ def _simulate(args: argparse.Namespace) -> int:
     options = method_options(args.option, args.method)
     target = args.mechanism
     if target.endswith(".py"):   # a user's mechanism file: its own parameter set, the variant chosen here
-        from study.mechanisms import load_mechanism
+        from study.user_mechanism import load_mechanism
 
         target = load_mechanism(target, args.variant)
     run = {k: getattr(args, k) for k in ("variant", "method", "integrator", "acceleration_solver", "backend", "friction",
@@ -122,7 +122,7 @@ def _describe(args: argparse.Namespace) -> int:
     from study.describe import describe_text
 
     if args.mechanism.endswith(".py"):
-        from study.mechanisms import load_mechanism
+        from study.user_mechanism import load_mechanism
 
         print(describe_text(load_mechanism(args.mechanism, args.variant)))
     else:
@@ -131,7 +131,7 @@ def _describe(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from study.mechanisms import load_mechanism
+    from study.user_mechanism import load_mechanism
     from study.validation import Settings, validate
 
     settings = Settings(**{k: getattr(args, k) for k in ("t_end", "output_step", "h", "levels", "friction_eps")
@@ -274,7 +274,7 @@ def main(argv: list[str] | None = None) -> int:
     that failed); ``STUDY_TRACEBACK=1`` shows the traceback instead."""
     from study.errors import SimulationError
     from study.solver.friction import PainleveError
-    from study.solver.initial import InitialConditionError
+    from study.model.initial_state import InitialConditionError
 
     args = build_parser().parse_args(argv)
     try:

@@ -12,7 +12,7 @@ import numpy as np
 import sympy as sp
 
 from study import mechanisms
-from study.mechanisms import Mechanism
+from study.model import Mechanism
 from study.model.coordinates import joint_rows, poses
 from study.model.joints import Description, Distance, Prismatic
 from study.params import ParameterSet, available_variants, load_parameters
@@ -36,7 +36,7 @@ def _point(ref: tuple[str, str]) -> str:
 def describe_text(mechanism: str | Mechanism, variant: str = "seed") -> str:
     """A mechanism's description as a plain-text page: a study mechanism by name (variant ``variant``), or a
     :class:`study.Mechanism` (its own parameter set)."""
-    mech = mechanisms.mechanism(load_parameters(mechanism, variant)) if isinstance(mechanism, str) else mechanism
+    mech = mechanisms.named_mechanism(mechanism, variant) if isinstance(mechanism, str) else mechanism
     ps, d = mech.parameters, mech.description
     name, variant, folder = ps.mechanism, ps.variant, ps.path.parent
     show = _readable(d)

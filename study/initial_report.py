@@ -9,7 +9,7 @@ import pandas as pd
 
 from study.mechanisms import initial_state, load
 from study.params import available_mechanisms
-from study.solver.initial import constraint_residuals
+from study.model.initial_state import constraint_residuals
 
 
 def initial_conditions_table() -> pd.DataFrame:

@@ -4,8 +4,10 @@ A mechanism is known by its parameter file ``reference/<mechanism>.toml`` (``[me
 equal to the file name); the file is its own schema. A parameter entry is a table with ``value``,
 ``unit``, ``source`` (provenance: paper file, section, equation or table), ``doc`` (meaning) and its
 validation: ``rule`` (positive, nonnegative, finite) for numbers or ``choices`` for strings.
-Variants override named values of the ``seed`` set; nothing is ever filled in by default, and a
-parameter the mechanism's description needs but the file lacks is an error there.
+Variants override named values of the ``seed`` set; nothing is ever filled in by default. This module knows no
+mechanism: which parameters a description reads is the catalogue's knowledge (:mod:`study.mechanisms`), which passes
+them as ``required`` (a missing or unknown one is then listed with the file's other problems) and checks a set read
+without them with :func:`check_parameter_names` before describing it.
 
 A file may extend another mechanism's file in its folder (``[meta] extends = "<name>"``): it then holds that file's
 entries and variants as they are (values, units, sources, rules), adds entries of its own, and needs its own
@@ -28,7 +30,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from study.arguments import shown
 from study.locations import REFERENCE_DIR  # the study's data folder (re-exported: params.REFERENCE_DIR)
@@ -59,20 +61,6 @@ ENTRY_KEYS = {"value", "unit", "source", "doc", "rule", "choices"}
 
 class ParameterError(ValueError):
     """A parameter file is malformed; the message lists every problem found."""
-
-
-def required_parameters(mechanism: str) -> tuple[str, ...]:
-    """The parameters a mechanism's description reads: ``study.mechanisms.<mechanism>.PARAMETERS``.
-
-    The description module is found by name only (no mechanism is known here), and imported when
-    a parameter file is checked, after this module is loaded.
-    """
-    import importlib
-    import importlib.util
-
-    if importlib.util.find_spec(f"study.mechanisms.{mechanism}") is None:
-        return ()
-    return tuple(getattr(importlib.import_module(f"study.mechanisms.{mechanism}"), "PARAMETERS", ()))
 
 
 def values_class(mechanism: str, names: list[str]) -> type:
@@ -221,7 +209,8 @@ def _parse(path: str, size: int, mtime_ns: int) -> dict[str, Any]:
         raise ParameterError(f"{path}: not valid TOML: {exc}") from None
 
 
-def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path | None = None) -> ParameterSet:
+def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path | None = None,
+                    required: Sequence[str] = ()) -> ParameterSet:
     """Load and validate one variant of a mechanism's parameter file.
 
     Parameters
@@ -232,6 +221,10 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
         A key of the file's ``[variants]`` table; ``'seed'`` is the paper's set.
     reference_dir : Path, optional
         Folder holding ``<mechanism>.toml``; defaults to the study's data (:data:`study.locations.REFERENCE_DIR`).
+    required : sequence of str, optional
+        The parameters the mechanism's description reads (the catalogue's :class:`study.mechanisms.Entry`): a missing
+        or an unknown one is then listed with the file's other problems. Without it the file is its own schema, and
+        :func:`check_parameter_names` checks the set before it is described.
 
     Raises
     ------
@@ -239,10 +232,11 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
         Listing every missing or unknown key, wrong type, non-finite or out-of-range value.
     """
     path = _path_for(mechanism, reference_dir)
-    return parse_parameters(_read(path), mechanism, variant, path)
+    return parse_parameters(_read(path), mechanism, variant, path, required)
 
 
-def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path: Path) -> ParameterSet:
+def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path: Path,
+                     required: Sequence[str] = ()) -> ParameterSet:
     """Validate an already-parsed parameter document (see :func:`load_parameters`)."""
     problems: list[str] = []
 
@@ -253,82 +247,16 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     unknown_sections = set(raw) - {"meta", "parameters", "initial_conditions", "variants"}
     for key in sorted(unknown_sections):
         problem(key, "...", "unknown top-level table (allowed: meta, parameters, initial_conditions, variants)")
-
     params = raw.get("parameters", {})
-    required = required_parameters(mechanism)
-    for name in required:
-        if name not in params:
-            problem(f"parameters.{name}", None, f"missing (the description of {mechanism} needs it; physics "
-                                               f"parameters have no defaults)")
-    values: dict[str, Any] = {}
-    units: dict[str, str] = {}
-    sources: dict[str, str] = {}
-    fields: dict[str, dict[str, Any]] = {}     # name -> {'rule': ...} or {'choices': (...)}
     if not params:
         problem("parameters", params, "missing or empty (every physics parameter is listed with its value)")
-    for name, entry in params.items():
-        key = f"parameters.{name}"
-        if required and name not in required:
-            problem(key, entry, f"unknown parameter for {mechanism} (its description reads: {', '.join(required)})")
-            continue
-        if not isinstance(entry, dict):
-            problem(key, entry, "must be a table with keys value, unit, source, doc and rule (or choices)")
-            continue
-        extra = set(entry) - ENTRY_KEYS
-        missing = {"value", "unit", "source", "doc"} - set(entry)
-        if extra:
-            problem(key, sorted(extra), f"unknown keys (allowed: {', '.join(sorted(ENTRY_KEYS))})")
-        if missing:
-            problem(key, sorted(missing), "missing keys (every parameter needs value, unit, source and doc)")
-            continue
-        if ("rule" in entry) == ("choices" in entry):
-            problem(key, entry.get("rule", entry.get("choices")), "needs exactly one of rule (numbers) or choices (strings)")
-            continue
-        if "rule" in entry and entry["rule"] not in RULES:
-            problem(f"{key}.rule", entry["rule"], f"must be one of {', '.join(RULES)}")
-            continue
-        if "choices" in entry and (not isinstance(entry["choices"], list) or not entry["choices"]
-                                   or not all(isinstance(c, str) for c in entry["choices"])):
-            problem(f"{key}.choices", entry["choices"], "must be a non-empty list of strings")
-            continue
-        for text_key in ("unit", "source", "doc"):
-            if not isinstance(entry[text_key], str) or not entry[text_key].strip():
-                problem(f"{key}.{text_key}", entry[text_key], "must be non-empty text (write '-' for a dimensionless "
-                                                              "unit)" if text_key == "unit" else "must be non-empty text")
-        fields[name] = {"rule": entry["rule"]} if "rule" in entry else {"choices": tuple(entry["choices"])}
-        values[name] = entry["value"]
-        units[name] = entry["unit"]
-        sources[name] = entry["source"]
-
-    variants = raw.get("variants", {})
-    overridden: set[str] = set()
-    if variant not in variants:
-        problem("variants", variant, f"unknown variant (valid choices: {', '.join(variants) or 'none'})")
-        variant_note = ""
-    else:
-        overrides = dict(variants[variant])
-        variant_note = overrides.pop("note", "")
-        for name, value in overrides.items():
-            if name not in fields:
-                problem(f"variants.{variant}.{name}", value, f"unknown parameter for {mechanism}")
-            else:
-                values[name] = value
-                overridden.add(name)
-                sources[name] = f"variant '{variant}': {variant_note}"
-
-    for name, value in values.items():
-        meta = fields[name]
-        key = f"variants.{variant}.{name}" if name in overridden else f"parameters.{name}"
-        if "choices" in meta:
-            if not isinstance(value, str) or value not in meta["choices"]:
-                problem(key, value, f"must be one of {', '.join(meta['choices'])}")
-        else:
-            why = _check_number(value, meta["rule"])
-            if why:
-                problem(key, value, why)
-            else:
-                values[name] = float(value)
-
+    if required:
+        problems += _name_problems(params, required, mechanism)
+    fields, values, units, sources = _entries({k: v for k, v in params.items() if not required or k in required},
+                                              problem)
+    variant_note, overridden = _apply_variant(raw.get("variants", {}), variant, mechanism, fields, values, sources,
+                                              problem)
+    _check_values(values, fields, overridden, variant, problem)
     initial = _parse_initial(raw.get("initial_conditions", {}), problem)
     if problems:
         raise ParameterError(f"{path} (mechanism {mechanism}, variant {variant}):\n" + "\n".join(problems))
@@ -346,6 +274,103 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
         path=path,
         sha256=hashlib.sha256(canonical.encode()).hexdigest(),
     )
+
+
+def _entry_problem(key: str, entry: Any, problem) -> bool:
+    """Report what is wrong with one parameter entry's keys and text; True when it cannot be read at all."""
+    if not isinstance(entry, dict):
+        problem(key, entry, "must be a table with keys value, unit, source, doc and rule (or choices)")
+        return True
+    extra = set(entry) - ENTRY_KEYS
+    missing = {"value", "unit", "source", "doc"} - set(entry)
+    if extra:
+        problem(key, sorted(extra), f"unknown keys (allowed: {', '.join(sorted(ENTRY_KEYS))})")
+    if missing:
+        problem(key, sorted(missing), "missing keys (every parameter needs value, unit, source and doc)")
+        return True
+    if ("rule" in entry) == ("choices" in entry):
+        problem(key, entry.get("rule", entry.get("choices")), "needs exactly one of rule (numbers) or choices (strings)")
+        return True
+    if "rule" in entry and entry["rule"] not in RULES:
+        problem(f"{key}.rule", entry["rule"], f"must be one of {', '.join(RULES)}")
+        return True
+    if "choices" in entry and (not isinstance(entry["choices"], list) or not entry["choices"]
+                               or not all(isinstance(c, str) for c in entry["choices"])):
+        problem(f"{key}.choices", entry["choices"], "must be a non-empty list of strings")
+        return True
+    for text_key in ("unit", "source", "doc"):
+        if not isinstance(entry[text_key], str) or not entry[text_key].strip():
+            problem(f"{key}.{text_key}", entry[text_key], "must be non-empty text (write '-' for a dimensionless "
+                                                          "unit)" if text_key == "unit" else "must be non-empty text")
+    return False
+
+
+def _entries(params: Mapping[str, Any], problem) -> tuple[dict, dict, dict, dict]:
+    """The readable entries' validation (name -> {'rule': ...} or {'choices': (...)}), values, units and sources."""
+    fields: dict[str, dict[str, Any]] = {}
+    values: dict[str, Any] = {}
+    units: dict[str, str] = {}
+    sources: dict[str, str] = {}
+    for name, entry in params.items():
+        if _entry_problem(f"parameters.{name}", entry, problem):
+            continue
+        fields[name] = {"rule": entry["rule"]} if "rule" in entry else {"choices": tuple(entry["choices"])}
+        values[name] = entry["value"]
+        units[name] = entry["unit"]
+        sources[name] = entry["source"]
+    return fields, values, units, sources
+
+
+def _apply_variant(variants: Mapping[str, Any], variant: str, mechanism: str, fields: Mapping, values: dict,
+                   sources: dict, problem) -> tuple[str, set[str]]:
+    """Override ``values`` (and their sources) with the variant's; its note and the names it overrides."""
+    if variant not in variants:
+        problem("variants", variant, f"unknown variant (valid choices: {', '.join(variants) or 'none'})")
+        return "", set()
+    overrides = dict(variants[variant])
+    variant_note = overrides.pop("note", "")
+    overridden: set[str] = set()
+    for name, value in overrides.items():
+        if name not in fields:
+            problem(f"variants.{variant}.{name}", value, f"unknown parameter for {mechanism}")
+        else:
+            values[name] = value
+            overridden.add(name)
+            sources[name] = f"variant '{variant}': {variant_note}"
+    return variant_note, overridden
+
+
+def _check_values(values: dict, fields: Mapping, overridden: set[str], variant: str, problem) -> None:
+    """Check every value against its rule or choices (numbers become floats)."""
+    for name, value in values.items():
+        meta = fields[name]
+        key = f"variants.{variant}.{name}" if name in overridden else f"parameters.{name}"
+        if "choices" in meta:
+            if not isinstance(value, str) or value not in meta["choices"]:
+                problem(key, value, f"must be one of {', '.join(meta['choices'])}")
+        else:
+            why = _check_number(value, meta["rule"])
+            if why:
+                problem(key, value, why)
+            else:
+                values[name] = float(value)
+
+
+def _name_problems(given: Mapping[str, Any], required: Sequence[str], mechanism: str) -> list[str]:
+    """A missing parameter (physics parameters have no defaults) and an unknown one (``given``: name -> what to show),
+    against the names ``required`` that the mechanism's description reads."""
+    problems = [f"  parameters.{name} = None: missing (the description of {mechanism} needs it; physics "
+                f"parameters have no defaults)" for name in required if name not in given]
+    return problems + [f"  parameters.{name} = {shown(value)}: unknown parameter for {mechanism} (its description "
+                       f"reads: {', '.join(required)})" for name, value in given.items() if name not in required]
+
+
+def check_parameter_names(ps: ParameterSet, required: Sequence[str]) -> None:
+    """Raise ParameterError unless ``ps`` holds exactly the parameters ``required`` (those its mechanism's description
+    reads): a missing one and an unknown one are named with the file."""
+    problems = _name_problems(vars(ps.values), required, ps.mechanism)
+    if problems:
+        raise ParameterError(f"{ps.path} (mechanism {ps.mechanism}, variant {ps.variant}):\n" + "\n".join(problems))
 
 
 def _parse_initial(raw: Mapping[str, Any], problem) -> InitialConditions:

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from study.mechanisms import Mechanism, as_mechanism
+from study.mechanisms import as_mechanism
+from study.model import Mechanism
 from study.model.joints import Distance, Prismatic, Revolute
 from study.params import ParameterSet
 from study.results import SimulationResult

@@ -36,7 +36,8 @@ __all__ = ["BACKENDS", "DEFAULT_FRICTION", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", 
 def resolve(eom_or_mechanism, variant: str | None):
     """An EquationsOfMotion, a Mechanism (a description with its parameter set) or a built-in mechanism name (with
     its variant) -> (eom, mechanism or None)."""
-    from study.mechanisms import Mechanism, mechanism
+    from study.mechanisms import mechanism
+    from study.model import Mechanism
     from study.params import load_parameters
 
     if isinstance(eom_or_mechanism, (EquationsOfMotion, Mechanism)) and variant is not None:
@@ -101,7 +102,7 @@ def simulate(
         to its consistent initial state); or a study mechanism's name, e.g. 'slider_crank' (then ``variant``
         selects the parameter set, default 'seed', and q0, qd0 default to its consistent initial state).
     q0, qd0 : (m,) array_like
-        Initial state; it should satisfy the constraints (see ``study.solver.initial``).
+        Initial state; it should satisfy the constraints (see ``study.model.initial_state``).
     t_end : float
         End time [s], > 0.
     method : str or Stabilization

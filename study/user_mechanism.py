@@ -20,6 +20,7 @@ import numpy as np
 
 from study.errors import UserFileError
 from study.model.joints import Description, DescriptionError
+from study.model.mechanism import Mechanism
 from study.params import ParameterSet, available_mechanisms, load_parameters
 
 SHAPE = "a user's mechanism: describe(ps) in <name>.py, its parameters in <name>.toml beside it"
@@ -28,7 +29,7 @@ SHAPE = "a user's mechanism: describe(ps) in <name>.py, its parameters in <name>
 def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, ParameterSet, np.ndarray | None]:
     """What a user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
     give: the checked description, the parameter set and Newton's start (None: the printed q(0)), from which
-    :func:`study.mechanisms.load_mechanism` makes the Mechanism; a :class:`~study.errors.UserFileError` (or a
+    :func:`load_mechanism` makes the Mechanism; a :class:`~study.errors.UserFileError` (or a
     ParameterError for the ``.toml``) names what is wrong."""
     path = python_file(path)
     module = _run(path)
@@ -51,6 +52,12 @@ def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, Pa
         raise UserFileError(f"{path}: describe(ps) at line {_first_line(describe)} returned a description that fails "
                             f"its checks: {exc}") from exc
     return d, ps, guess
+
+
+def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
+    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
+    (whatever is wrong in the file is one UserFileError naming the file, the function, the line and the cause)."""
+    return Mechanism(*load_parts(path, variant))
 
 
 def python_file(path: str | Path) -> Path:
@@ -116,7 +123,8 @@ def _parameters(path: Path, module: ModuleType, variant: str) -> ParameterSet:
     toml = path.with_suffix(".toml")
     if path.stem in available_mechanisms():
         raise UserFileError(f"{path}: a user's mechanism cannot be named like the study's mechanism {path.stem!r} "
-                            f"(its parameter file would be checked against study.mechanisms.{path.stem}): rename "
+                            f"(its results would carry that name, by which the reports read the study mechanism's label and units): "
+                            f"rename "
                             f"{path.name} and {toml.name}")
     if not toml.is_file():
         raise UserFileError(f"{path}: its parameter file {toml} does not exist ({SHAPE})")
@@ -161,8 +169,8 @@ def _hint(value: Any) -> str:
     if isinstance(getattr(value, "description", None), Description):   # a study.Mechanism
         return " (return the description: the Mechanism is made from it and the parameter set)"
     if isinstance(value, MechanismBuilder):
-        return (" (a MechanismBuilder is a body-level description for equations of one's own; describe(ps) returns "
-                "the joint-level study.Description every engine takes)")
+        return (" (a MechanismBuilder is the study's internal body-level form a description is lowered to; "
+                "describe(ps) returns the joint-level study.Description every engine takes)")
     return ""
 
 

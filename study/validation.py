@@ -30,7 +30,7 @@ import pandas as pd
 from study.compare import common_samples, max_deviation, observed_orders
 from study.errors import SimulationError
 from study.errors import ResultIntegrityError
-from study.mechanisms import Mechanism
+from study.model import Mechanism
 from study.output_folder import claim_output_folder
 from study.pipeline.tables import forget_table, table_names, write_table
 from study.reference_data import tolerance

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from study.mechanisms import Mechanism  # noqa: E402
+from study.model import Mechanism  # noqa: E402
 from study.pipeline.tables import read_table  # noqa: E402
 from study.reference_data import tolerance  # noqa: E402
 from study.report.render import fmt_number, frame_table  # noqa: E402

@@ -13,7 +13,7 @@ import sympy as sp
 import study
 from study.model.coordinates import lower
 from study.model.joints import GROUND, Description, DescriptionError, Potential
-from study.solver.initial import InitialConditionError
+from study.model.initial_state import InitialConditionError
 from test_free_bodies import parameter_set
 
 VALUES = {"m": 1.0, "J": 0.1, "a": 0.5, "g": 9.81, "zero": 0.0}

@@ -1,6 +1,6 @@
 """Coulomb friction in revolute joints in the Exudyn models, against the in-house reference path.
 
-The Exudyn model of a pin with friction (study.exudyn_models.guards.PinFriction) applies the regularized torque
+The Exudyn model of a pin with friction (study.exudyn_models.guards.PinFrictionTorque) applies the regularized torque
 tau = -(mu_k r sqrt(|R|^2 + delta^2) + T0) tanh(omega_rel/eps) on the joint's body a and -tau on its body b, |R|
 read from Exudyn's own joint reaction through the ReactionGuard. On models generated from the same descriptions,
 it must converge to the in-house reference path (DOP853 at reference_rtol with projection, friction='regularized',

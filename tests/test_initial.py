@@ -6,7 +6,7 @@ import pytest
 import handwritten
 from study.mechanisms import initial_state, load
 from study.reference_data import tolerance
-from study.solver.initial import InitialConditionError, consistent_initial_conditions, constraint_residuals
+from study.model.initial_state import InitialConditionError, consistent_initial_conditions, constraint_residuals
 
 PRINTED_QUICK_RETURN_Q = [3.0020, 2.1628, 2.7751]      # 001 sec. 4
 PRINTED_QUICK_RETURN_QD = [6.2832, 2.3656, -2.9769]

@@ -8,7 +8,7 @@ import pytest
 import handwritten
 from study.mechanisms import initial_state, load
 from study.reference_data import tolerance
-from study.solver.initial import consistent_initial_conditions
+from study.model.initial_state import consistent_initial_conditions
 
 RNG_SEED = 20261121  # recorded seed of the random configurations
 

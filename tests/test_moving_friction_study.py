@@ -24,6 +24,7 @@ import pandas as pd
 import pytest
 
 import study.mechanisms as mechanisms
+from study.model import Mechanism
 from study.params import load_parameters
 from study.pipeline import CASES_DIR, InlineExecutor, Store, find, find_one, load_case_list, run_cases, write_tables
 from study.pipeline.execute import run_case
@@ -31,7 +32,7 @@ from study.pipeline.summaries import energy_check, energy_flags
 from study.reference_data import tolerance
 from study.report.context import ReportContext
 from study.simulate import simulate
-from study.solver.initial import consistent_initial_conditions
+from study.model.initial_state import consistent_initial_conditions
 from study.studies import moving_friction as mf
 
 CONTACT = "block_on_rocker"
@@ -42,11 +43,11 @@ def case_list():
     return load_case_list(CASES_DIR / "moving_friction.toml")
 
 
-def slot_mechanism(**values) -> mechanisms.Mechanism:
+def slot_mechanism(**values) -> Mechanism:
     ps = load_parameters("quick_return", "slot_friction")
     if values:
         ps = dataclasses.replace(ps, values=dataclasses.replace(ps.values, **values))
-    return mechanisms.Mechanism(mechanisms.description(ps), ps)
+    return Mechanism(mechanisms.description(ps), ps)
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from study.params import REFERENCE_DIR, ParameterError, load_parameters, parse_parameters
+from study.mechanisms import CATALOGUE, description
+from study.params import REFERENCE_DIR, ParameterError, available_mechanisms, load_parameters, parse_parameters
 
 
 def raw(mechanism):
@@ -16,7 +17,7 @@ def raw(mechanism):
 
 
 def parse(doc, mechanism="slider_crank", variant="seed"):
-    return parse_parameters(doc, mechanism, variant, Path(f"{mechanism}.toml"))
+    return parse_parameters(doc, mechanism, variant, Path(f"{mechanism}.toml"), CATALOGUE[mechanism].parameters)
 
 
 @pytest.mark.parametrize("mechanism,variants", [
@@ -59,6 +60,22 @@ def test_unknown_key_named():
     doc["parameters"]["l9"] = {"value": 1.0, "unit": "m", "source": "x"}
     with pytest.raises(ParameterError, match=r"parameters\.l9 .*unknown parameter"):
         parse(doc)
+
+
+@pytest.mark.parametrize("change,message", [
+    ("missing", r"parameters\.J2 = None: missing \(the description of slider_crank needs it"),
+    ("unknown", r"parameters\.l9 = 1\.0: unknown parameter for slider_crank"),
+])
+def test_a_set_read_without_the_names_is_checked_before_it_is_described(change, message):
+    # without required= the file is its own schema; the catalogue checks the names before describing the set
+    doc = raw("slider_crank")
+    if change == "missing":
+        del doc["parameters"]["J2"]
+    else:
+        doc["parameters"]["l9"] = {"value": 1.0, "unit": "m", "source": "x", "doc": "x", "rule": "positive"}
+    ps = parse_parameters(doc, "slider_crank", "seed", Path("slider_crank.toml"))
+    with pytest.raises(ParameterError, match=message):
+        description(ps)
 
 
 @pytest.mark.parametrize("key,value,rule", [
@@ -165,3 +182,8 @@ def test_extending_file_refuses_replacements_missing_bases_and_cycles(tmp_path, 
           entries={"a": 5.0} if case == "entry" else {"c": 3.0}, variants={"big": {}} if case == "variant" else None)
     with pytest.raises(ParameterError, match=message):
         load_parameters("ext_m", "seed", reference_dir=tmp_path)
+
+
+def test_catalogue_names_the_parameter_files():
+    """Every registered description has its parameter file, and every parameter file of the study its description."""
+    assert set(CATALOGUE) == set(available_mechanisms())

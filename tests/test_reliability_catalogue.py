@@ -37,7 +37,7 @@ from study.params import load_parameters
 from study.results import SimulationResult
 from study.simulate import simulate
 from study.solver.checks import validate_equations
-from study.solver.initial import InitialConditionError, consistent_initial_conditions
+from study.model.initial_state import InitialConditionError, consistent_initial_conditions
 
 
 @dataclass
@@ -398,18 +398,18 @@ def gamma_wrong_seen_at_rest(tmp):
 
 
 @entry("user equations", "q0 = [2, 0] is off the constraints", "initial_state_residual",
-       "study.solver.initial", error=EquationsError)
+       "study.model.initial_state", error=EquationsError)
 def pendulum_at_twice_its_length(tmp):
     return lambda: simulate(handwritten.cartesian_pendulum(), [2.0, 0.0], PENDULUM_QD0)
 
 
-@entry("user equations", "qd0 = [1, 0] violates the velocity constraints", "study.solver.initial",
+@entry("user equations", "qd0 = [1, 0] violates the velocity constraints", "study.model.initial_state",
        error=EquationsError)
 def pendulum_velocity_along_the_rod(tmp):
     return lambda: simulate(handwritten.cartesian_pendulum(), PENDULUM_Q0, [1.0, 0.0])
 
 
-@entry("user equations", "off the constraints", "max|Phi(q0)| = 5.2", "study.solver.initial", error=EquationsError)
+@entry("user equations", "off the constraints", "max|Phi(q0)| = 5.2", "study.model.initial_state", error=EquationsError)
 def slider_crank_printed_state(tmp):
     ps = load_parameters("slider_crank")
     return lambda: simulate("slider_crank", list(ps.initial.printed_q), list(ps.initial.printed_qd), 0.1)

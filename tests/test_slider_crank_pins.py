@@ -23,14 +23,15 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import study
-from study.mechanisms import Mechanism, mechanism
+from study.mechanisms import mechanism
+from study.model import Mechanism
 from study.mechanisms import slider_crank_pins as pins
 from study.model.compile import compile_description
 from study.model.coordinates import lower
 from study.params import load_parameters
 from study.reactions import absolute_state
 from study.reference_data import tolerance
-from study.solver.initial import NEWTON_TOL
+from study.model.initial_state import NEWTON_TOL
 from study.solver.integrate import BRENT_XTOL
 
 RTOL = 1e-8

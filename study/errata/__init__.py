@@ -34,7 +34,7 @@ values reproduces every printed number to its printed digits, else ``wrong``.
 
 The numeric checks use parameter values spread randomly around the seed set (so that coincidences
 of the seed such as a1 = 0 or c2 = l2/2 cannot hide a misprint) and configurations along a whole
-turn of the crank, reached by continuation with :func:`study.solver.initial.consistent_initial_conditions`.
+turn of the crank, reached by continuation with :func:`study.model.initial_state.consistent_initial_conditions`.
 """
 
 from study.errata.judge import EQUIVALENT, EXACT, VERDICTS, WRONG, check_formula

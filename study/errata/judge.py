@@ -15,7 +15,7 @@ from study.errata.algebra import is_zero, trig_canonical
 from study.errata.derived import PaperContext
 from study.errata.latex import tex_against, tex_difference, tex_marked, tex_matrix
 from study.errata.printed import PAPERS
-from study.solver.initial import consistent_initial_conditions
+from study.model.initial_state import consistent_initial_conditions
 
 EXACT = "exact"
 EQUIVALENT = "equivalent on the constraint manifold"

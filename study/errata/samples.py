@@ -8,7 +8,7 @@ from typing import Sequence
 import numpy as np
 import sympy as sp
 
-from study.solver.initial import consistent_initial_conditions
+from study.model.initial_state import consistent_initial_conditions
 
 
 # Number of random configurations on the constraint manifold per mechanism; each one is a full

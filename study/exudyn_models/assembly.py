@@ -12,7 +12,7 @@ from study.exudyn_models.building import BodyState, Model
 from study.exudyn_models.guards import RecordedFriction
 from study.exudyn_models.kinematics import Kinematics
 from study.exudyn_models.load_law import Readers
-from study.mechanisms import Mechanism
+from study.model import Mechanism
 from study.model.joints import GROUND, Description
 
 Array = np.ndarray

@@ -8,7 +8,7 @@ revolute joint with friction), one function each, and whether a model needs its 
   point under the slider, and the guide carries the opposite force (a force at its centre of mass and the torque of
   its lever: the same load as the force at the slider point).
 * A revolute joint with friction data (a pin, ``friction=Friction(mu_s, mu_k, T0), radius=r``) whose mu_k or T0 is
-  > 0 gets the regularized law of :class:`~study.exudyn_models.guards.PinFriction`: the torque
+  > 0 gets the regularized law of :class:`~study.exudyn_models.guards.PinFrictionTorque`: the torque
   tau = -(mu_k r sqrt(|R|^2 + delta^2) + T0) tanh(omega_rel/eps) on its body a and -tau on its body b
   (LoadTorqueVector user functions; nothing on ground), omega_rel = theta_a' - theta_b' from the nodes, |R| the
   magnitude of the RevoluteJoint2D's 'Force' (its multipliers, a global vector; only the magnitude enters) through
@@ -25,7 +25,7 @@ import sympy as sp
 
 from study.exudyn_models.assembly import Assembly
 from study.exudyn_models.building import OVT
-from study.exudyn_models.guards import GuideFriction, PinFriction, ReactionGuard
+from study.exudyn_models.guards import GuideFriction, PinFrictionTorque, ReactionGuard
 from study.model.joints import GROUND, Description, Prismatic, Revolute
 
 #: How a friction law that reads a joint reaction (a guide's normal force, a pin's |R|) is evaluated.
@@ -88,7 +88,7 @@ def add_pin_friction(a: Assembly, j: Revolute, delta: float) -> None:
     obj = model.joints[j.name][0]
     guard = ReactionGuard(lambda mbs, o=obj: math.hypot(*mbs.GetObjectOutput(o, OVT.Force)[:2]))
     sides = (j.a[0], j.b[0])
-    fric = PinFriction(model, tuple(None if b == GROUND else model.node(b) for b in sides), guard,
+    fric = PinFrictionTorque(model, tuple(None if b == GROUND else model.node(b) for b in sides), guard,
                        coefficient=a.val(j.friction.mu_kinetic) * a.val(j.radius),
                        resistance=a.val(j.friction.resistance), eps=built.eps, delta=delta)
     loaded = [(side, body) for side, body in enumerate(sides) if body != GROUND]

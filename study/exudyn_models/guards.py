@@ -1,5 +1,5 @@
 """The guarded reading of a joint reaction inside a user function, and the regularized friction laws built on it:
-along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFriction`).
+along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFrictionTorque`).
 
 The law itself is not written here: the friction level is :func:`study.solver.friction.laws.friction_level` (and a
 pin's |R|_delta :func:`study.solver.friction.laws.pin_norm`), run as their Python source (``py_func``) as the
@@ -158,7 +158,7 @@ class GuideFriction(RecordedFriction):
         return [0.0, 0.0, -f * (lever[0] * axis[1] - lever[1] * axis[0])]
 
 
-class PinFriction(RecordedFriction):
+class PinFrictionTorque(RecordedFriction):
     """Regularized Coulomb friction of a revolute joint between bodies a and b (either may be ground).
 
     Torque on body a (and its opposite on body b): ``tau = -(mu r |R|_delta + T0) tanh(omega_rel / eps)``,

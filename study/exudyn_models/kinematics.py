@@ -18,7 +18,8 @@ import numpy as np
 import sympy as sp
 
 from study.exudyn_models.building import BodyState
-from study.mechanisms import Mechanism, as_mechanism
+from study.mechanisms import as_mechanism
+from study.model import Mechanism
 from study.model.coordinates import poses
 from study.model.joints import Description
 from study.params import ParameterSet

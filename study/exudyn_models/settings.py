@@ -45,7 +45,7 @@ EXPLICIT_SOLVERS = ("explicit_euler", "rk44", "dopri5")
 SOLVERS = IMPLICIT_SOLVERS + EXPLICIT_SOLVERS
 
 #: 'regularized': Coulomb friction -mu |N| tanh(v/eps) (and the resistance -F tanh(v/eps)) along a guide, and
-#: -(mu r |R|_delta + T0) tanh(omega_rel/eps) in a revolute joint (study.exudyn_models.guards.PinFriction);
+#: -(mu r |R|_delta + T0) tanh(omega_rel/eps) in a revolute joint (study.exudyn_models.guards.PinFrictionTorque);
 #: 'none': friction and resistance left out (the frictionless reference model).
 FRICTION_MODES = ("regularized", "none")
 

@@ -1,7 +1,7 @@
 """The Exudyn model of any joint-level description (:class:`study.model.joints.Description`), and its run.
 
 No mechanism is named here: bodies, joints, loads, friction and the result mapping are all read from the
-description of a :class:`study.mechanisms.Mechanism` (a user's, or a study mechanism's). :func:`build` assembles
+description of a :class:`study.model.Mechanism` (a user's, or a study mechanism's). :func:`build` assembles
 the model at the in-house consistent initial state with one handler per element kind; :func:`run` solves it and
 maps Exudyn's outputs back into a SimulationResult (:mod:`study.exudyn_models.mapping`). The in-house equations of
 motion are used for nothing but the consistent initial state and for evaluating the in-house Phi on Exudyn's
@@ -41,7 +41,8 @@ from study.exudyn_models.friction import active, add_contact_friction, add_pin_f
 from study.exudyn_models.guards import initialize, seed_reaction_guards
 from study.exudyn_models.kinematics import body_states, kinematics
 from study.exudyn_models.loads import add_load, add_potential
-from study.mechanisms import Mechanism, as_mechanism
+from study.mechanisms import as_mechanism
+from study.model import Mechanism
 from study.params import ParameterSet
 from study.reference_data import tolerance
 from study.results import SimulationResult

@@ -35,6 +35,7 @@ from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE
 from study.kernels.signatures import BIAS, EVALUATE, PHASES
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
+from study.model import Mechanism
 from study.model.eom import EquationsOfMotion
 from study.model.coordinates import lower
 from study.reference_data import tolerance
@@ -83,7 +84,7 @@ class CompiledModel:
     work_names: tuple[str, ...]
 
 
-_MODELS: dict[object, CompiledModel] = {}
+_MODELS: dict[Mechanism, CompiledModel] = {}
 _USER_MODELS: dict[int, tuple[EquationsOfMotion, CompiledModel]] = {}   # id -> (the equations, kept alive; model)
 
 
@@ -96,7 +97,7 @@ def user_model(eom: EquationsOfMotion) -> CompiledModel:
     return _USER_MODELS[id(eom)][1]
 
 
-def compiled_model(mechanism) -> CompiledModel:
+def compiled_model(mechanism: Mechanism) -> CompiledModel:
     """The compiled model of a mechanism's description in relative coordinates (generated once, then from disk)."""
     if mechanism not in _MODELS:
         b = lower(mechanism.description, "relative")
@@ -172,7 +173,7 @@ class Setup:
     phases: object   # the friction treatment's compiled_phases (no_phases without friction)
 
 
-def setup(eom: EquationsOfMotion, mechanism, q0, qd0, method: str, friction, friction_eps, friction_sgn,
+def setup(eom: EquationsOfMotion, mechanism: Mechanism | None, q0, qd0, method: str, friction, friction_eps, friction_sgn,
           acceleration_solver: str = "multiplier", **method_options) -> Setup:
     """Build the reference dynamics (``study.solver.run.build_dynamics``) and the compiled option arrays.
 
@@ -185,7 +186,7 @@ def setup(eom: EquationsOfMotion, mechanism, q0, qd0, method: str, friction, fri
                  compiled_phases(dyn))
 
 
-def _pack(eom: EquationsOfMotion, mechanism,
+def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
           dyn: Dynamics) -> tuple[CompiledModel, np.ndarray, np.ndarray]:
     """The compiled model of the equations (of ``mechanism``'s description, else of ``eom``'s callables) and the
     option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.kernels.cache.check``):

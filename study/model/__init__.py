@@ -1,6 +1,12 @@
-"""Mechanism description -> symbolic derivation -> compiled numeric equations of motion."""
+"""The model: a joint-level description with its parameters and initial state (:class:`Mechanism`), lowered to
+coordinates, derived symbolically and compiled into :class:`EquationsOfMotion`.
 
-from study.model.builder import DescriptionError, MechanismBuilder
-from study.model.eom import EquationsOfMotion, PinFriction, SlidingContact
+The one public way to a mechanism is Description -> Mechanism (:mod:`study.model.mechanism`); the body-level
+:class:`study.model.builder.MechanismBuilder` a description is lowered to is internal to the derivation.
+"""
 
-__all__ = ["DescriptionError", "EquationsOfMotion", "MechanismBuilder", "PinFriction", "SlidingContact"]
+from study.model.builder import DescriptionError
+from study.model.eom import EquationsOfMotion, FrictionalPin, SlidingContact
+from study.model.mechanism import Mechanism
+
+__all__ = ["DescriptionError", "EquationsOfMotion", "FrictionalPin", "Mechanism", "SlidingContact"]

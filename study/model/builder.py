@@ -82,7 +82,7 @@ class Contact:
 
 
 @dataclass(frozen=True)
-class PinFriction:
+class SymbolicPinFriction:
     """Coulomb friction of a revolute cut joint whose rows are ``rows`` (x, y: their multipliers are its reaction
     R): a torque tau = -(mu_kinetic r |R|_delta + torque) s(omega_rel) on ``body_a`` and -tau on ``body_b`` (None:
     ground), omega_rel = theta_a' - theta_b'; at rest it holds up to mu_static r |R|_delta + torque."""
@@ -127,7 +127,7 @@ class MechanismBuilder:
         self.point_loads: list[PointLoad] = []
         self.torque_loads: list[TorqueLoad] = []
         self.contacts: list[Contact] = []
-        self.pin_frictions: list[PinFriction] = []
+        self.pin_frictions: list[SymbolicPinFriction] = []
         self.gravity_g: Expr | None = None
         self.t = sp.Symbol("t", real=True)
         self.switches: list[tuple[str, Expr, sp.Symbol]] = []
@@ -193,9 +193,9 @@ class MechanismBuilder:
         return c
 
     def pin_friction(self, name: str, rows, body_a: Body | None, body_b: Body | None, mu_static: Any,
-                     mu_kinetic: Any, radius: Any, torque: Any = 0) -> PinFriction:
+                     mu_kinetic: Any, radius: Any, torque: Any = 0) -> SymbolicPinFriction:
         """Coulomb friction of a revolute joint whose two constraint rows (already added) are ``rows``."""
-        pin = PinFriction(name, tuple(rows), body_a, body_b,
+        pin = SymbolicPinFriction(name, tuple(rows), body_a, body_b,
                           *(sp.sympify(v) for v in (mu_static, mu_kinetic, radius, torque)))
         self.pin_frictions.append(pin)
         return pin

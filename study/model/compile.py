@@ -24,7 +24,7 @@ from study.cache_folder import cache_dir  # noqa: F401  (the cache root; importe
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
 from study.model.derive import SymbolicEquations, derive
-from study.model.eom import EquationsOfMotion, PinFriction, SlidingContact
+from study.model.eom import EquationsOfMotion, FrictionalPin, SlidingContact
 from study.sources import source_files, source_hash
 
 def _generator_source() -> str:
@@ -211,7 +211,7 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
             return (0.0 if ba is None else float(ba(q, qd))) - (0.0 if bb is None else float(bb(q, qd)))
 
         values = {k: float(getattr(pin, k).subs(subs)) for k in ("mu_static", "mu_kinetic", "radius", "torque")}
-        pins.append(PinFriction(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
+        pins.append(FrictionalPin(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
                                 rate_jacobian=rate_jacobian, rate_bias=rate_bias, **values))
 
     return EquationsOfMotion(

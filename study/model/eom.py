@@ -59,7 +59,7 @@ class SlidingContact:
 
 
 @dataclass(frozen=True)
-class PinFriction:
+class FrictionalPin:
     """Coulomb friction of a revolute joint whose reaction R is the multipliers of constraint rows ``rows`` (x, y).
 
     The friction torque on the relative rotation is tau = -(mu_kinetic radius |R|_delta + torque) s(omega_rel),
@@ -109,7 +109,7 @@ class EquationsOfMotion:
         ``-(Phi_q qd)_q qd``.
     contacts : sequence of SlidingContact
         Sliding joints with Coulomb friction (optional).
-    pin_frictions : sequence of PinFriction
+    pin_frictions : sequence of FrictionalPin
         Revolute joints with Coulomb friction (optional; a user's equations run them on backend 'reference' only).
     potential_energy : callable (q) -> float, optional
         Potential of the conservative loads included in ``forces`` (gravity, springs).
@@ -137,7 +137,7 @@ class EquationsOfMotion:
     coordinate_names: tuple[str, ...] = ()
     constraint_names: tuple[str, ...] = ()
     contacts: tuple[SlidingContact, ...] = ()
-    pin_frictions: tuple[PinFriction, ...] = ()
+    pin_frictions: tuple[FrictionalPin, ...] = ()
     potential_energy: Callable[[Array], float] | None = None
     applied_forces: Callable[..., Mapping[str, Array]] = _no_forces
     indicators: Callable[[float, Array, Array], Array] | None = None

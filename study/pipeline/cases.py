@@ -325,7 +325,7 @@ def _error_names() -> set[str]:
     """The error classes a case may be expected to stop with: the study's own and Exudyn's SolverError."""
     from study import errors
     from study.solver.friction import FrictionLawError, PainleveError
-    from study.solver.initial import InitialConditionError
+    from study.model.initial_state import InitialConditionError
 
     own = {n for n, v in vars(errors).items() if isinstance(v, type) and issubclass(v, Exception)}
     return own | {c.__name__ for c in (FrictionLawError, PainleveError, InitialConditionError)} | {"SolverError"}

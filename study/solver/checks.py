@@ -7,7 +7,7 @@ Before a run (:func:`validate_equations`, once, skipped with ``simulate(..., che
 3. phi_q(q0) equals the central-difference Jacobian of phi;
 4. gamma(q0, qd) equals its definition -(Phi_q qd)_q qd, by a central difference of phi_q along qd
    (at qd0 and at a unit test velocity, so a zero qd0 does not make the check empty);
-5. q0 and qd0 lie on the constraints (``study.solver.initial`` makes them consistent).
+5. q0 and qd0 lie on the constraints (``study.model.initial_state`` makes them consistent).
 
 Every failed check is listed in one :class:`study.errors.EquationsError`. The tolerances are in
 ``reference/tolerances.toml`` with their reasons.
@@ -242,7 +242,7 @@ def validate_equations(eom: EquationsOfMotion, q0: Array, qd0: Array, t0: float 
             problems.append(f"qd0 = {_fmt(qd0)} violates the velocity constraints: max|Phi_q qd0| = {vel:.6g} is "
                             f"{vel / vel_scale:.3g} of |Phi_q| |qd0| (allowed {res:g}, initial_state_residual)")
         if problems:
-            hint = ("; make the state consistent with study.solver.initial.consistent_initial_conditions "
+            hint = ("; make the state consistent with study.model.initial_state.consistent_initial_conditions "
                     "(or pass check=False to run from it anyway)")
             raise EquationsError(_message(eom, problems) + hint, tuple(problems))
     if problems:

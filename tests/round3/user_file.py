@@ -114,7 +114,7 @@ for what, value, fragment in (("int", "42", "returned an int, not a study.Descri
 add(G, "describe_returns_a_mechanism", library(GOOD.replace("    return d\n", "    return study.Mechanism(d, ps)\n")),
     UserFileError, "pend.py", "returned a study.Mechanism, not a study.Description")
 add(G, "describe_returns_a_builder",
-    library(GOOD.replace("    return d\n", "    return study.MechanismBuilder('pend', ['th'], {'m': 1.0})\n")),
+    library(GOOD.replace("    return d\n", "    return study.model.builder.MechanismBuilder('pend', ['th'], {'m': 1.0})\n")),
     UserFileError, "pend.py", "returned a study.MechanismBuilder, not a study.Description")
 SYNTAX = GOOD.replace("    p = d.p\n", "    p = d.p(\n")
 add(G, "syntax_error_validate", command("validate", SYNTAX), 2, "pend.py", "line 7", "syntax")

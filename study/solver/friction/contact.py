@@ -25,7 +25,7 @@ Exactly one consistent solution is used. None, or two that differ, is Painleve's
 (friction makes the normal force ill-posed) and raises :class:`PainleveError`; nothing is chosen
 silently. The treatments of sgn are in :mod:`study.solver.friction.laws`.
 
-Revolute joints with friction (:class:`study.model.PinFriction`, cut joints whose reaction R_p is the multipliers
+Revolute joints with friction (:class:`study.model.FrictionalPin`, cut joints whose reaction R_p is the multipliers
 of their two rows) add a torque on the relative rotation omega_p = P_p qd (P_p = d omega_p / d qd), generalized
 force P_p^T tau_p:
 

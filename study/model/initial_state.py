@@ -1,6 +1,8 @@
 """Consistent initial conditions (paper 001 eqs. 6-7): Newton-Raphson on Phi(q) = 0, then Phi_q qd = 0.
 
-The independent coordinates and rates are held at the given values; the dependent ones are solved.
+The independent coordinates and rates are held at the given values; the dependent ones are solved. A model-level
+computation on the constraint equations alone (no integrator): :class:`study.model.Mechanism` finds its initial state
+with it, and both engines start from that state.
 """
 
 from __future__ import annotations
@@ -12,7 +14,6 @@ import numpy as np
 
 from study.model.eom import EquationsOfMotion
 from study.reference_data import tolerance
-from study.solver.checks import singular_values
 
 # Newton stops when max|Phi| <= NEWTON_TOL. 1e-13 is a few ulps of the mechanisms' lengths
 # (<= 10 m), the smallest residual double precision can promise for these trigonometric constraints.
@@ -91,8 +92,8 @@ def consistent_initial_conditions(
         jac_v = jac[:, dep]
         # Scale-aware: sigma_min(Phi_v) relative to sigma_max(Phi_q), the whole Jacobian (the condition
         # number of Phi_v alone is 1 for any 1 x 1 Phi_v, however close to zero it is).
-        sigma = singular_values(jac)
-        ratio = float(singular_values(jac_v).min() / sigma.max()) if sigma.size and sigma.max() > 0 else 0.0
+        sigma = np.linalg.svd(jac, compute_uv=False)     # r > 0 rows here, so neither matrix is empty
+        ratio = float(np.linalg.svd(jac_v, compute_uv=False).min() / sigma.max()) if sigma.max() > 0 else 0.0
         if not ratio >= singular_ratio:
             raise InitialConditionError(
                 f"{eom.name}: the dependent Jacobian Phi_q[:, {dep.tolist()}] is singular at q = {q}: "
