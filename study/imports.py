@@ -13,8 +13,8 @@ resolves it (the package finishes importing its submodules before anything uses 
 importing anything else (another package, a sibling's submodule) is an edge like any other.
 
 :func:`dependencies` is what a cache key covers: the modules reachable from some entry modules. A package
-reached that way brings all its submodules with it (``study.mechanisms`` imports the study's mechanisms by
-name with :mod:`importlib`, which no ``import`` statement shows). A module's enclosing packages add their
+reached that way brings all its submodules with it (a package's code may reach its submodules in ways no
+``import`` statement shows, e.g. by name with :mod:`importlib`). A module's enclosing packages add their
 ``__init__`` files, which run first, but not what those re-export; the top package's ``__init__`` (the public
 re-exports) is left out: it computes nothing.
 """
@@ -122,11 +122,11 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "locations", "sources", "cache_folder", "integrity", "arguments", "reference_data",
      "reference_solutions", "imports", "progress", "output_folder", "emulate", "results", "compare"),
     ("kernels",),
-    ("model", "params", "inline_parameters", "user_mechanism", "spatial"),
+    ("model", "mechanisms", "params", "inline_parameters", "user_mechanism", "spatial"),
     ("laws",),
     ("solver",),
     ("fast",),
-    ("mechanisms", "friction_default", "run_arguments", "reactions"),
+    ("friction_default", "run_arguments", "reactions"),
     ("exudyn_models", "simulate"),
     ("pipeline", "validation_plan"),
     ("studies", "errata", "initial_report", "verify", "report", "bench", "validation", "validation_report",
