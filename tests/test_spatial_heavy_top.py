@@ -53,13 +53,18 @@ def heavy_top() -> SpatialDescription:
     return d
 
 
-@pytest.fixture(scope="module")
-def top():
+def heavy_top_start():
+    """The description, its equations and the consistent initial state (q0, qd0) of the top."""
     d = heavy_top()
     eom = spatial_equations(d)
     q0, qd0 = initial_state(d, eom, {"top": values("centre_of_mass", TABLE)},
                             angular_velocities={"top": values("angular_velocity", TABLE)})
-    return eom, q0, qd0
+    return d, eom, q0, qd0
+
+
+@pytest.fixture(scope="module")
+def top():
+    return heavy_top_start()[1:]
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,303 @@
+"""The Exudyn model of a spatial description (:class:`study.spatial.SpatialDescription`), and its run.
+
+The model is built from the description alone, one handler per element kind; the in-house equations give only the
+consistent initial state (the caller's q0, qd0, as for the planar models) and, in the result, the in-house Phi on
+Exudyn's coordinates and the norm rows' multipliers (below).
+
+* body: NodeRigidBodyEP at the centre of mass (reference coordinates = the body's (r, p) of q0, initial velocities
+  its (r_dot, p_dot) of qd0: the same seven coordinates as the description's) with ObjectRigidBody (mass, the
+  inertia tensor at the centre of mass), and gravity as LoadMassProportional.
+* spherical: JointSpherical, marker 0 at body b's point, marker 1 at body a's point (Exudyn's rows p_m1 - p_m0 are
+  the description's r_a + A_a s_a - r_b - A_b s_b).
+* revolute: JointGeneric with the rotation about the joint frame's z axis free; marker 0 on body b with the frame
+  (f_b, g_b, h_b), marker 1 on body a with (f, g, h_a) (:func:`study.spatial.joints.perpendicular_pair`), so that
+  Exudyn's two rotation rows are the description's (A_a f)^T (A_b h_b) and (A_a g)^T (A_b h_b).
+* fixed: JointGeneric with every axis locked; marker 0 on body b with the frame C, marker 1 on body a with the
+  identity: the joint frames coincide when A_a = A_b C, the description's lock.
+* point force: LoadForceVector at a MarkerBodyPosition (global components); torque: LoadTorqueVector at a
+  MarkerBodyRigid, ``bodyFixed`` for the 'body' frame. A law of time is a Python load user function.
+
+Result mapping (:func:`result`): q, qd, qdd = the nodes' coordinates (reference + displacement), rates and
+accelerations (Exudyn's, not finite differences). lam, in ``eom.constraint_names`` order: a joint row's multiplier
+is Exudyn's algebraic coordinate of the matching equation (JOINT_ROWS: the same function of q, so the same multiplier,
+with the sign -1 where Exudyn's row is the description's with its two vectors swapped, whose gradients are opposite
+on the constraint manifold). A norm row p^T p - 1 has no physical reaction and its multiplier depends on the
+formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`; Exudyn's own Euler-parameter
+multiplier stays 0): the result carries the in-house convention's value, the p-block's component along p of
+Q - M qdd - Phi_q,joints^T lam on Exudyn's state, divided by 2 p^T p. Energies: kinetic from Exudyn's centre
+velocities and body-frame angular velocities, potential -sum m g . r, and work_<load> the trapezoidal integral of
+each load's power (law value . the sensed point velocity or angular velocity).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import exudyn as exu
+import numpy as np
+import sympy as sp
+from exudyn.itemInterface import (LoadForceVector, LoadMassProportional, LoadTorqueVector, MarkerBodyMass,
+                                  MarkerBodyPosition, MarkerBodyRigid, NodeRigidBodyEP, ObjectJointGeneric,
+                                  ObjectJointSpherical, ObjectRigidBody, SensorBody, SensorNode)
+
+import study.exudyn_models.settings as settings
+import study.exudyn_models.solve as solve
+from study.exudyn_models.building import OVT, Model
+from study.model.eom import EquationsOfMotion
+from study.results import SimulationResult, package_versions
+from study.spatial.description import SpatialDescription, spatial_only
+from study.spatial.elements import GROUND, FixedJoint, PointLoad, Revolute, Spherical
+from study.spatial.joints import perpendicular_pair
+
+Array = np.ndarray
+
+#: joint kind -> (suffix of the description's row, index of Exudyn's algebraic coordinate in the joint, sign).
+#: Verified at t = 0 against the in-house multipliers (tests/test_spatial_exudyn.py).
+JOINT_ROWS = {
+    Spherical: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0)),
+    Revolute: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("f", 3, 1.0), ("g", 4, 1.0)),
+    FixedJoint: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("rx", 5, -1.0), ("ry", 3, 1.0), ("rz", 4, -1.0)),
+}
+NORM_NOTE = ("the norm rows' multipliers are the in-house convention's (Exudyn's Euler-parameter multiplier belongs "
+             "to its own mass matrix): the p-block's component along p of Q - M qdd - Phi_q,joints^T lam on Exudyn's "
+             "state, / (2 p^T p)")
+
+
+@dataclass
+class SpatialBuilt:
+    """A built spatial model: the Exudyn system, its nodes and joints by name, the loads' laws and their power
+    sensors, and the algebraic coordinates recorded at every step (``ae``, filled while it runs)."""
+
+    d: SpatialDescription
+    model: Model
+    nodes: dict = field(default_factory=dict)     # body -> node
+    objects: dict = field(default_factory=dict)   # body -> object
+    joints: dict = field(default_factory=dict)    # joint name -> object
+    laws: dict = field(default_factory=dict)      # load name -> callable t -> (3,) values
+    ae: list = field(default_factory=list)        # (t, algebraic coordinates) at t = 0 and after every step
+
+    def marker(self, body: str, point, rotation: Array | None = None) -> int:
+        """A rigid marker at a body's named point (ground: a global point), its frame turned by ``rotation``."""
+        local = point if body == GROUND else self.d.bodies[body].points[point]
+        obj = self.model.ground if body == GROUND else self.objects[body]
+        frame = np.eye(3) if rotation is None else rotation
+        return self.model.mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localHT=exu.HT(
+            rotation=frame.tolist(), translation=[float(v) for v in local])))
+
+    def sensor(self, key, item) -> None:
+        self.model.sensors[key] = self.model.mbs.AddSensor(item)
+
+
+def _store(**kwargs) -> dict:
+    return {**kwargs, "storeInternal": True, "writeToFile": False}
+
+
+def add_bodies(b: SpatialBuilt, q0: Array, qd0: Array) -> None:
+    """Every body at its (r, p) of q0 with its rates of qd0, under gravity; sensors of its coordinates, rates,
+    accelerations and angular velocity (body frame)."""
+    mbs = b.model.mbs
+    for i, (name, body) in enumerate(b.d.bodies.items()):
+        k = slice(7 * i, 7 * i + 7)
+        node = mbs.AddNode(NodeRigidBodyEP(referenceCoordinates=[float(v) for v in q0[k]],
+                                           initialVelocities=[float(v) for v in qd0[k]]))
+        j = body.inertia
+        obj = mbs.AddObject(ObjectRigidBody(nodeNumber=node, mass=body.mass, inertia=[
+            j[0, 0], j[1, 1], j[2, 2], j[1, 2], j[0, 2], j[0, 1]]))
+        b.nodes[name], b.objects[name] = node, obj
+        if np.any(b.d.gravity_vector):
+            mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=obj)),
+                                             loadVector=[float(v) for v in b.d.gravity_vector]))
+        for key, ovt in (("coordinates", OVT.Coordinates), ("rates", OVT.Coordinates_t),
+                         ("accelerations", OVT.Coordinates_tt), ("omega_body", OVT.AngularVelocityLocal)):
+            b.sensor((name, key), SensorNode(**_store(nodeNumber=node, outputVariableType=ovt)))
+
+
+def add_spherical(b: SpatialBuilt, j: Spherical) -> int:
+    return b.model.mbs.AddObject(ObjectJointSpherical(markerNumbers=[b.marker(j.body_b, j.b),
+                                                                     b.marker(j.body_a, j.a)]))
+
+
+def _axis(b: SpatialBuilt, body: str, axis) -> Array:
+    return np.array(axis if body == GROUND else b.d.bodies[body].axes[axis], dtype=float)
+
+
+def add_revolute(b: SpatialBuilt, j: Revolute) -> int:
+    """The joint frames (f_b, g_b, h_b) on body b and (f, g, h_a) on body a; the rotation about z is free."""
+    frames = []
+    for body, axis in ((j.body_b, j.axis_b), (j.body_a, j.axis_a)):
+        h = _axis(b, body, axis)
+        frames.append(np.column_stack([*perpendicular_pair(h), h]))
+    return b.model.mbs.AddObject(ObjectJointGeneric(
+        markerNumbers=[b.marker(j.body_b, j.b, frames[0]), b.marker(j.body_a, j.a, frames[1])],
+        constrainedAxes=[1, 1, 1, 1, 1, 0]))
+
+
+def add_fixed(b: SpatialBuilt, j: FixedJoint) -> int:
+    return b.model.mbs.AddObject(ObjectJointGeneric(
+        markerNumbers=[b.marker(j.body_b, j.b, np.asarray(j.orientation, dtype=float)), b.marker(j.body_a, j.a)],
+        constrainedAxes=[1, 1, 1, 1, 1, 1]))
+
+
+#: joint class -> its handler
+JOINTS = {Spherical: add_spherical, Revolute: add_revolute, FixedJoint: add_fixed}
+
+
+def add_joint(b: SpatialBuilt, j) -> None:
+    """The handler of the joint's kind."""
+    handler = JOINTS.get(type(j))
+    if handler is None:
+        raise TypeError(f"joint {j.name!r} of kind {type(j).__name__} has no Exudyn handler (kinds: "
+                        f"{', '.join(k.__name__ for k in JOINTS)})")
+    b.joints[j.name] = handler(b, j)
+
+
+def _law(components, t: sp.Symbol):
+    """(constant values or None, callable t -> (3,) values) of three expressions of time."""
+    if all(not sp.sympify(c).free_symbols for c in components):
+        values = [float(c) for c in components]
+        return values, lambda _t: np.array(values)
+    f = sp.lambdify(t, list(components), modules="numpy")
+    return None, lambda time: np.array(f(time), dtype=float)
+
+
+def add_load(b: SpatialBuilt, load) -> None:
+    """A point force (global) or a torque ('global' or 'body' frame); a law of time as a load user function; a
+    sensor of the loaded point's velocity or of the body's angular velocity in the law's frame (the power)."""
+    mbs, obj = b.model.mbs, b.objects[load.body]
+    constant, law = _law(load.components, b.d.t)
+    b.laws[load.name] = law
+    user = {} if constant is not None else {"loadVectorUserFunction": lambda mbs_, t, vector: list(law(t))}
+    vector = constant if constant is not None else [0.0, 0.0, 0.0]
+    if isinstance(load, PointLoad):
+        local = [float(v) for v in b.d.bodies[load.body].points[load.point]]
+        marker = mbs.AddMarker(MarkerBodyPosition(bodyNumber=obj, localPosition=local))
+        mbs.AddLoad(LoadForceVector(markerNumber=marker, loadVector=vector, **user))
+        b.sensor((load.name, "power"), SensorBody(**_store(bodyNumber=obj, localPosition=local,
+                                                            outputVariableType=OVT.Velocity)))
+        return
+    body_frame = load.frame == "body"
+    marker = mbs.AddMarker(MarkerBodyRigid(bodyNumber=obj, localPosition=[0.0, 0.0, 0.0]))
+    mbs.AddLoad(LoadTorqueVector(markerNumber=marker, loadVector=vector, bodyFixed=body_frame, **user))
+    b.sensor((load.name, "power"), SensorNode(**_store(
+        nodeNumber=b.nodes[load.body], outputVariableType=OVT.AngularVelocityLocal if body_frame else
+        OVT.AngularVelocity)))
+
+
+def build(d: SpatialDescription, q0, qd0) -> SpatialBuilt:
+    """The Exudyn model of a spatial description at the state (q0, qd0) (the description's coordinates), with the
+    algebraic coordinates recorded at t = 0 (first pre-step call) and after every step."""
+    d = spatial_only(d)
+    b = SpatialBuilt(d, Model())
+    add_bodies(b, np.asarray(q0, dtype=float), np.asarray(qd0, dtype=float))
+    for j in d.joints:
+        add_joint(b, j)
+    for load in d.loads:
+        add_load(b, load)
+
+    def record_start(mbs, t):
+        if not b.ae:
+            b.ae.append((t, np.array(mbs.systemData.GetAECoordinates(), dtype=float)))
+
+    def record(mbs, t):
+        b.ae.append((t, np.array(mbs.systemData.GetAECoordinates(), dtype=float)))
+    b.model.pre_step.append(record_start)
+    b.model.post_step.append(record)
+    b.model.assemble()
+    return b
+
+
+def joint_multipliers(b: SpatialBuilt, ae: Array, names) -> tuple[Array, list[int]]:
+    """(n, r) multipliers of the joint rows from Exudyn's algebraic coordinates (norm rows left 0), and the indices
+    of the norm rows."""
+    lam = np.zeros((ae.shape[0], len(names)))
+    sources = {}
+    for j in b.d.joints:
+        ltg = list(b.model.mbs.systemData.GetObjectLTGAE(b.joints[j.name]))
+        for suffix, index, sign in JOINT_ROWS[type(j)]:
+            sources[f"{j.name}_{suffix}"] = (ltg[index], sign)
+    norms = []
+    for k, row in enumerate(names):
+        if row in sources:
+            lam[:, k] = sources[row][1] * ae[:, sources[row][0]]
+        elif row.endswith("_norm") and row[:-5] in b.d.bodies:
+            norms.append(k)
+        else:
+            raise ValueError(f"constraint row {row!r} has no Exudyn counterpart in {b.d.name!r}")
+    return lam, norms
+
+
+def norm_multipliers(eom: EquationsOfMotion, t: Array, q: Array, qd: Array, qdd: Array, lam: Array,
+                     norms: list[int]) -> None:
+    """Fill the norm rows of ``lam`` with the in-house convention's value (module docstring), in place."""
+    joints = [k for k in range(lam.shape[1]) if k not in norms]
+    for n in range(len(t)):
+        jac = eom.phi_q(q[n])
+        rest = eom.forces(t[n], q[n], qd[n]) - eom.mass(q[n]) @ qdd[n] - jac[joints].T @ lam[n, joints]
+        for k in norms:
+            block = np.flatnonzero(jac[k])       # the body's four Euler parameters (2 p^T)
+            p = 0.5 * jac[k, block]
+            lam[n, k] = p @ rest[block] / (2 * p @ p)
+
+
+def _energies(b: SpatialBuilt, t: Array, series: dict) -> dict[str, Array]:
+    """Kinetic, potential and every load's work at every step (module docstring)."""
+    kinetic, potential = np.zeros(len(t)), np.zeros(len(t))
+    for name, body in b.d.bodies.items():
+        rates, w = series[(name, "rates")], series[(name, "omega_body")]
+        kinetic += 0.5 * body.mass * (rates[:, :3] ** 2).sum(axis=1) + 0.5 * np.einsum("ni,ij,nj->n", w, body.inertia, w)
+        potential -= body.mass * (series[(name, "coordinates")][:, :3] @ b.d.gravity_vector)
+    out = {"kinetic": kinetic, "potential": potential}
+    for name, law in b.laws.items():
+        power = np.einsum("ni,ni->n", np.array([law(ti) for ti in t]), series[(name, "power")])
+        out[f"work_{name}"] = solve.cumulative_trapezoid(power, t)
+    return out
+
+
+def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.RunGrid, solver: str,
+           stats: dict) -> SimulationResult:
+    """The SimulationResult of a solved spatial model (module docstring)."""
+    t = grid.h * np.arange(grid.n_steps + 1)
+    series = {key: b.model.series(key, grid) for key in b.model.sensors}
+    for i, name in enumerate(b.d.bodies):
+        series[(name, "coordinates")] = series[(name, "coordinates")] + q0[7 * i:7 * i + 7]
+    q, qd, qdd = (np.hstack([series[(name, key)] for name in b.d.bodies])
+                  for key in ("coordinates", "rates", "accelerations"))
+    ae = np.array([row for _, row in b.ae], dtype=float)
+    if ae.shape[0] != len(t) or np.abs(np.array([time for time, _ in b.ae]) - t).max() > 1e-9 * max(grid.t_end, 1.0):
+        raise RuntimeError(f"recorded {ae.shape[0]} rows of multipliers, expected one per step ({len(t)}) on k*h")
+    lam, norms = joint_multipliers(b, ae, eom.constraint_names)
+    idx = grid.output_indices
+    t, q, qd, qdd, lam = t[idx], q[idx], qd[idx], qdd[idx], lam[idx]
+    norm_multipliers(eom, t, q, qd, qdd, lam, norms)
+    energies = {k: v[idx] for k, v in _energies(b, grid.h * np.arange(grid.n_steps + 1), series).items()}
+    meta = {
+        "engine": "exudyn", "exudyn_version": settings.exudyn_version(), "method": f"exudyn_{solver}",
+        "solver": solver, "solver_description": settings.SOLVER_DESCRIPTIONS[solver], "h": grid.h,
+        "t_end": grid.t_end, "output_step": grid.h * grid.stride, "mechanism": b.d.name,
+        "coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
+        "newton_tolerance": settings.NEWTON_TOLERANCE,
+        "spectral_radius": settings.SPECTRAL_RADIUS if solver == "index3" else None,
+        "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
+        "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, "versions": package_versions(),
+    }
+    return SimulationResult(t=t, q=q, qd=qd, qdd=qdd, lam=lam, phi=np.array([eom.phi(x) for x in q]),
+                            phidot=np.array([eom.phi_q(x) @ v for x, v in zip(q, qd)]), energies=energies,
+                            stats=stats, meta=meta)
+
+
+def run_spatial(d: SpatialDescription, eom: EquationsOfMotion, q0, qd0, t_end: float, h: float,
+                solver: str = "index3", output_step: float | None = None) -> SimulationResult:
+    """Simulate a spatial description in Exudyn from the consistent state (q0, qd0) (:func:`study.spatial.
+    initial_state`); ``eom`` (:func:`study.spatial.spatial_equations` of the same description) maps the result.
+
+    ``solver``: 'index3' (generalized-alpha, index-3 constraints) or 'index2' (trapezoidal, index-2); Exudyn's
+    explicit solvers refuse the joints and the Euler-parameter rows (``exudyn.ModelError``). ``t_end`` a whole
+    number of fixed steps ``h``; ``output_step`` a whole multiple of h (default: every step).
+    """
+    grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS)
+    q0 = np.asarray(q0, dtype=float)
+    b = build(d, q0, qd0)
+    simulation = settings.simulation_settings(grid, solver, 0)   # loads of time only: no load Jacobian
+    stats = {"configuration": "python", "linear_solver": "dense", "newton_tolerance": settings.NEWTON_TOLERANCE}
+    stats.update(solve.solve(b.model, simulation, solver))
+    return result(b, eom, q0, grid, solver, stats)
