@@ -45,84 +45,46 @@ def simulate(
     max_output_bytes: float | None = None,
     **method_options,
 ) -> SimulationResult:
-    """Simulate a constrained mechanism.
+    """Simulate a constrained mechanism: :func:`study.engines.run` of the :class:`study.engines.InHouse`
+    specification of these keyword arguments (each option is documented there and in ``study.engines``).
 
     Parameters
     ----------
     eom_or_mechanism : EquationsOfMotion, Mechanism or str
-        A user's equations; a :class:`study.Mechanism` (a description with its parameter set: q0, qd0 default
-        to its consistent initial state); or a study mechanism's name, e.g. 'slider_crank' (then ``variant``
-        selects the parameter set, default 'seed', and q0, qd0 default to its consistent initial state).
+        A user's equations (then ``q0``, ``qd0`` are required); a :class:`study.Mechanism`; or a study mechanism's
+        name, e.g. 'slider_crank', with ``variant`` (default 'seed'). q0, qd0 default to the consistent state.
     q0, qd0 : (m,) array_like
         Initial state; it should satisfy the constraints (see ``study.solver.initial``).
     t_end : float
         End time [s], > 0.
     method : str or Stabilization
-        Stabilization: 'none', 'baumgarte', 'sliding_mode', 'projection'; options go in
-        ``method_options`` (d, omega or alpha, beta; Lambda, K, k, sgn, width; weighting). Or a
-        ``study.solver.stabilization.Stabilization`` object (e.g. ``Baumgarte(d=1, omega=10)``, or a
-        user's subclass on the reference backend), whose fields are its options.
+        'none', 'baumgarte', 'sliding_mode', 'projection' with its options in ``method_options`` (d, omega or
+        alpha, beta; Lambda, K, k, sgn, width; weighting), or a ``study.solver.stabilization.Stabilization`` object.
     integrator : str
-        'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (scipy, adaptive: ``rtol``, default 1e-8, and ``atol``,
-        default 1e-10) or 'RK4' (fixed ``step``, no longer than ``t_end``): these integrate the
-        accelerations of ``acceleration_solver`` stabilized by ``method``. Or 'ALI3P' (fixed ``step``): the
-        index-3 augmented Lagrangian with mass-orthogonal projections of Bayo and Ledesma on the trapezoidal
-        rule (``study.solver.index3``), which holds the position constraints itself and passes singular
-        positions; it takes no ``method`` but 'none', no ``acceleration_solver``, no friction, no switching
-        loads, and runs on the reference backend. An argument the chosen integrator would ignore (``step``
-        for an adaptive one, ``rtol``/``atol`` for a fixed-step one) is refused.
+        'RK45', 'DOP853', 'RK23', 'Radau', 'LSODA' (``rtol``, default 1e-8; ``atol``, default 1e-10; ``min_step``,
+        default ``min_step_fraction`` * t_end), 'RK4' or 'ALI3P' (``step``; ALI3P, the index-3 augmented Lagrangian,
+        takes no method, acceleration solver, friction or switching loads). An argument the integrator would
+        ignore is refused.
     acceleration_solver : str, optional
-        'multiplier' (the default), 'partitioned' (R/D matrix) or 'orthonormal' (these need a full-rank
-        Phi_q: a run stops at a singular pose with a SingularConfigurationError naming the time, pose and
-        rank), or 'augmented_lagrangian' (passes singular poses and redundant constraints; no singularity
-        monitor).
-    output_step : float
-        Spacing of the saved samples [s].
-    friction : {'default', 'none', 'exact', 'regularized', 'sign'}
-        Coulomb friction at the sliding contacts and pins (``study.solver.friction``). 'default': the parameter
-        set's treatment of every entry with friction (``study.friction_default``); 'none' (or None) leaves them
-        out, named in ``meta['friction_left_out']``. 'exact': event-located stick/slip; 'regularized': sgn replaced
-        by ``friction_sgn`` ('tanh', 'sat', 'arctan', 'sqrt'; default 'tanh') of width ``friction_eps``
-        [m/s] (default 1e-3); 'sign': paper 000's plain sgn (use with integrator='RK4'). ``friction_eps``
-        also sets the band |v_t| <= eps reported as apparent stick by 'regularized' and 'sign'. A
-        width or sgn the chosen treatment does not use is refused. The result gains
-        forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies ``work_friction_<c>``.
-        Revolute joints with friction (``Description.revolute(..., friction=, radius=)``) follow the contacts in
-        these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque on the joint's first body
-        [N m], ``friction_eps`` read in rad/s), with every treatment on both backends.
-    resistance_reading : {None, 'holds', 'sliding_only'}
-        Whether a contact's constant resistance counts in the static limit of the 'exact' treatment
-        (``study.solver.friction.RESISTANCE_READINGS``). None: the parameter set's
-        ``resistance_reading`` if it has one, else 'holds' (``study.model.SlidingContact.resistance``).
+        'multiplier' (default), 'partitioned', 'orthonormal' (full-rank Phi_q) or 'augmented_lagrangian'.
+    friction, friction_eps, friction_sgn, resistance_reading
+        'default' (the parameter set's treatment, ``study.friction_default``), 'none' (or None), 'exact',
+        'regularized' (``friction_sgn`` of width ``friction_eps``) or 'sign' (stick band ``friction_eps``);
+        ``resistance_reading`` (None: the parameter set's, else 'holds') for 'exact'. See ``study.engines.friction``.
     backend : {'reference', 'compiled'}
-        'reference': the Python solver with scipy's integrators. 'compiled': generated numba code and a
-        compiled integration loop (``study.fast``; multiplier solver, RK23/RK45/DOP853/RK4; Radau and
-        LSODA take scipy's steps on the compiled evaluations); an unsupported combination raises a
-        ValueError naming the option.
-    check : bool
-        Validate the equations and the initial state once before the run (``study.solver.checks``:
-        symmetric positive-definite M(q0), phi_q and gamma against finite differences of phi and
-        phi_q, q0 and qd0 on the constraints); False skips it. A singular pose is refused either way.
-    max_evaluations : float, optional
-        Bound on right-hand-side evaluations (default ``max_evaluations`` in reference/tolerances.toml).
-        A fixed-step run that needs more is refused before it starts, with its estimate.
-    min_step : float, optional
-        Smallest step of an adaptive integrator [s] (default ``min_step_fraction`` * t_end).
-    max_output_bytes : float, optional
-        Bound on the estimated memory of the output (default ``max_output_bytes``).
+        scipy's loop on Python evaluations, or the compiled loop (``study.fast``; Radau and LSODA take scipy's steps
+        on compiled evaluations); an unsupported combination is refused by name.
+    output_step, check, max_evaluations, max_output_bytes, progress
+        Sample spacing [s]; validate the equations and q0, qd0 first (``study.solver.checks``); the bounds of the
+        run (defaults in reference/tolerances.toml; a fixed-step run over them is refused before it starts); a
+        callback with the time reached.
 
     Raises
     ------
     ValueError
-        A bad argument (named); ``study.errors.EquationsError`` for equations or a state that fail
-        the checks; ``study.errors.RunTooLargeError`` for a run refused by its estimate.
+        A bad argument (named); ``study.errors.EquationsError``, ``study.errors.RunTooLargeError``.
     study.errors.SimulationError
-        The run failed: non-finite values, a singular configuration, a bound reached (time, quantity
-        and likely cause in the message).
-
-    Returns
-    -------
-    SimulationResult
+        The run failed (time, quantity and likely cause in the message).
     """
     flat = dict(method=method, integrator=integrator, rtol=rtol, atol=atol, step=step, output_step=output_step,
                 acceleration_solver=acceleration_solver, friction=friction, friction_eps=friction_eps,

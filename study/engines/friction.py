@@ -1,7 +1,13 @@
 """The in-house run's friction treatment, as an object (``study.solver.friction``): the parameter set's own
 (:class:`Default`, ``study.friction_default``), none, the exact stick/slip, the regularized sgn of width ``eps`` and
 the plain sgn. Each flattens to the friction keywords of :func:`study.simulate` (``arguments``) and back
-(:func:`friction_from`)."""
+(:func:`friction_from`).
+
+With friction, a result gains forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies
+``work_friction_<c>`` per contact; revolute joints with friction (``Description.revolute(..., friction=, radius=)``)
+follow the contacts in these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque on the joint's
+first body [N m], ``eps`` read in rad/s), with every treatment on both backends. ``eps`` of 'regularized' and
+'sign' is also the band |v_t| <= eps reported as apparent stick."""
 
 from __future__ import annotations
 

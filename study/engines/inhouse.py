@@ -17,7 +17,8 @@ from study.engines.spec import refuse_unknown
 from study.fast.support import check_supported
 from study.run_arguments import DEFAULT_OUTPUT_STEP, check_arguments
 from study.solver.index3 import NAME as INDEX3
-from study.solver.stabilization import STABILIZATIONS, NoStabilization, Stabilization, make_stabilization
+from study.solver.stabilization import (STABILIZATIONS, NoStabilization, Stabilization, make_stabilization,
+                                        method_options)
 
 #: The keys of an in-house run's dict besides its method's options (those are the method's fields).
 KEYS = ("engine", "method", "integrator", "rtol", "atol", "min_step", "step", "friction", "friction_eps", "friction_sgn",
@@ -81,7 +82,8 @@ class InHouse:
         if not dataclasses.is_dataclass(self.method) or STABILIZATIONS.get(self.method.name) is not method:
             raise ValueError(f"InHouse: method = {self.method!r} is not one of the study's methods "
                              f"({', '.join(STABILIZATIONS)}): a run with it cannot be written as a dict")
-        options = {f.name: getattr(self.method, f.name) for f in dataclasses.fields(self.method) if f.name != "name"}
+        options = {f.name: getattr(self.method, f.name) for f in dataclasses.fields(self.method)
+                   if f.name in method_options(self.method.name)}
         flat = {"engine": self.engine, **self.arguments(), "method": self.method.name, **options}
         return {k: list(v) if isinstance(v, (tuple, np.ndarray)) else v for k, v in flat.items() if v is not None}
 
@@ -96,9 +98,7 @@ class InHouse:
         method = flat.pop("method", "none")
         options = {k: flat.pop(k) for k in list(flat) if k not in KEYS}
         if not isinstance(method, Stabilization) and method in STABILIZATIONS:
-            declared = {f.name for f in dataclasses.fields(STABILIZATIONS[method])} - {"name"}
-            declared |= {"alpha", "beta"} if method == "baumgarte" else set()
-            refuse_unknown(f"method {method!r} nor of an in-house run", options, [*sorted(declared), *KEYS[1:]])
+            refuse_unknown(f"method {method!r} nor of an in-house run", options, [*method_options(method), *KEYS[1:]])
         check_arguments(**{k: flat.get(k) for k in ("rtol", "atol", "step", "min_step", "friction_eps", "friction_sgn",
                                                     "acceleration_solver", "resistance_reading", "max_evaluations",
                                                     "max_output_bytes")},
