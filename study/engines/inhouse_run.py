@@ -15,7 +15,7 @@ from study.friction_default import friction_entries, treatment
 from study.model.eom import EquationsOfMotion
 from study.reference_data import tolerance
 from study.results import SimulationResult
-from study.run_arguments import DEFAULT_FRICTION, FIXED_STEP, check_run_size
+from study.run_arguments import DEFAULT_ATOL, DEFAULT_FRICTION, DEFAULT_RTOL, FIXED_STEP, check_run_size
 from study.solver.accelerations import make_acceleration_solver
 from study.solver.assemble import assemble_result
 from study.solver.checks import RunGuard, SingularityMonitor, validate_equations
@@ -30,6 +30,8 @@ def run_inhouse(eom: EquationsOfMotion, mech, spec, t_end, q0, qd0, progress) ->
     given = spec.checked(t_end, progress)
     s = {**spec.arguments(), "acceleration_solver": spec.solver(), "progress": progress}
     s.update({k: given[k] for k in ("t_end", "step", "rtol", "atol") if given[k] is not None})
+    for key, default in (("rtol", DEFAULT_RTOL), ("atol", DEFAULT_ATOL)):   # as every run had them (fixed-step: unused)
+        s[key] = default if s[key] is None else s[key]
     ps = None if mech is None else mech.parameters
     arguments.per_constraint(spec.method.name, _options_of(spec.method), eom)
     s["friction"], s["friction_eps"], s["friction_sgn"], stated = _friction(eom, ps, given, s)
@@ -92,7 +94,8 @@ def _scipy_loop(eom, mech, spec, s: dict, q0, qd0, reading: str, monitor, stated
         cpu0 = time.process_time()
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # non-finite states are diagnosed
             traj, stats = integrate_index3(dyn, y0, t_end, t_out, step, ALI3P(), s["progress"])
-        return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, stated, **settings)
+        return _result(dyn, traj, stats, time.process_time() - cpu0, eom, ps, stated, **settings | {"rtol": None,
+                                                                                                      "atol": None})
 
     post_step = None
     if dyn.stabilization.projects:
