@@ -6,6 +6,7 @@ from study.model import EquationsOfMotion, Mechanism, SlidingContact
 from study.model.mechanism import consistent_state, equations_of
 from study.model.joints import GROUND, Description, DescriptionError, Friction
 from study.params import ParameterError, ParameterSet, load_parameters
+from study.engines import Exudyn, InHouse, exudyn_run, run, spec_from_dict
 from study.results import SimulationResult
 from study.simulate import simulate, simulate_methods
 
@@ -15,7 +16,9 @@ __all__ = [
     "DescriptionError",
     "EquationsError",
     "EquationsOfMotion",
+    "Exudyn",
     "Friction",
+    "InHouse",
     "Mechanism",
     "NonFiniteError",
     "ParameterError",
@@ -33,14 +36,16 @@ __all__ = [
     "joint_reactions",
     "load_mechanism",
     "load_parameters",
+    "run",
     "simulate",
     "simulate_methods",
+    "spec_from_dict",
     "validate",
     "ValidationSettings",
 ]
 
 # Imported when first used: Exudyn (and the report's plotting) load only for what needs them.
-_LAZY = {"exudyn_run": ("study.exudyn_models", "run"), "joint_reactions": ("study.reactions", "joint_reactions"),
+_LAZY = {"joint_reactions": ("study.reactions", "joint_reactions"),
          "validate": ("study.validation", "validate"), "ValidationSettings": ("study.validation", "Settings"),
          "load_mechanism": ("study.user_mechanism", "load_mechanism")}
 

@@ -157,6 +157,18 @@ def _bench(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = arguments.Parser(prog="python -m study", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
+    for add in (_report_commands, _pipeline_commands, _verify_command, _simulate_command, _describe_command,
+                _validate_command, _bench_command):
+        add(sub)
+    for name, example in EXAMPLES.items():  # every command's --help ends with one example
+        command = sub.choices[name]
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
+        command.epilog = f"example:\n  {example}"
+    return parser
+
+
+def _report_commands(sub) -> None:
+    """initial, errata, report: from the equations or the saved results into the report folder."""
     for name, func, text in (
         ("initial", cli_pipeline.initial, "consistent initial conditions and the printed ones' residuals"),
         ("errata", cli_pipeline.errata, "check the papers' printed formulas against the derived equations"),
@@ -165,6 +177,10 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=text)
         p.add_argument("--out", type=Path, default=REPORTS, help="report folder (default: reports)")
         p.set_defaults(func=func)
+
+
+def _pipeline_commands(sub) -> None:
+    """run, reproduce: the case lists through the pipeline."""
     for name, func, text in (
         ("run", cli_pipeline.run, "run the studies' cases (reference/cases/*.toml) that are not cached, write their tables"),
         ("reproduce", cli_pipeline.reproduce, "initial conditions, errata, every study, and the report"),
@@ -183,6 +199,9 @@ def build_parser() -> argparse.ArgumentParser:
             p.set_defaults(studies=None)
         p.set_defaults(func=func)
 
+
+
+def _verify_command(sub) -> None:
     p = sub.add_parser("verify", help="regenerate every table and compare it with reports/tables (reference/verify.toml); "
                                       "--perturb: rerun every in-house case from a state moved by a few ulps instead")
     p.add_argument("studies", nargs="*", help="studies to check (default: every case list, plus initial and errata)")
@@ -195,7 +214,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help="perturbation of q(0), qd(0) in ulps, repeatable (default: +4 and -4)")
     p.set_defaults(func=cli_pipeline.verify)
 
+
+
+def _mechanism_help() -> str:
     from study.params import available_mechanisms
+
+    return (f"a study mechanism ({', '.join(available_mechanisms())}) or your own mechanism's .py file (describe(ps), "
+            f"its parameters in a .toml beside it)")
+
+
+def _simulate_command(sub) -> None:
+    """simulate: one in-house run, its flags the keyword arguments of study.simulate."""
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
 
@@ -205,8 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
 
     p = sub.add_parser("simulate", help="run one case and save its result (CSV + JSON)")
-    p.add_argument("mechanism", help=f"a study mechanism ({', '.join(available_mechanisms())}) or your own "
-                                     f"mechanism's .py file (describe(ps), its parameters in a .toml beside it)")
+    p.add_argument("mechanism", help=_mechanism_help())
     p.add_argument("--variant", "--case", dest="variant", default="seed",
                    help="parameter-set variant (default: seed; --case is an alias)")
     p.add_argument("--method", default="none", choices=list(STABILIZATIONS))
@@ -237,12 +265,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output path (writes .csv and .json)")
     p.set_defaults(func=_simulate)
 
+
+
+def _describe_command(sub) -> None:
     p = sub.add_parser("describe", help="print a mechanism's bodies, joints, loads, variants and consistent initial state")
-    p.add_argument("mechanism", help=f"a study mechanism ({', '.join(available_mechanisms())}) or your own "
-                                     f"mechanism's .py file (describe(ps), its parameters in a .toml beside it)")
+    p.add_argument("mechanism", help=_mechanism_help())
     p.add_argument("--variant", "--case", dest="variant", default="seed", help="parameter-set variant (default: seed)")
     p.set_defaults(func=_describe)
 
+
+
+def _validate_command(sub) -> None:
     p = sub.add_parser("validate", help="run your own mechanism (describe(ps) in a .py file, its parameters in a "
                                         ".toml beside it) through every in-house method and Exudyn; write a report")
     p.add_argument("file", type=Path, help="the mechanism's Python file")
@@ -256,17 +289,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=None, help="report folder (default validation/<file name>)")
     p.set_defaults(func=_validate)
 
+
+
+def _bench_command(sub) -> None:
     from study.bench.command import add_arguments as bench_arguments
 
     p = sub.add_parser("bench", help="benchmark: accuracy per CPU second, in-house vs Exudyn (same as "
                                      "python -m study.bench)")
     bench_arguments(p).set_defaults(func=_bench)
-
-    for name, example in EXAMPLES.items():  # every command's --help ends with one example
-        command = sub.choices[name]
-        command.formatter_class = argparse.RawDescriptionHelpFormatter
-        command.epilog = f"example:\n  {example}"
-    return parser
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -127,7 +127,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("solver",),
     ("fast",),
     ("friction_default", "run_arguments", "reactions"),
-    ("exudyn_models", "simulate"),
+    ("exudyn_models", "engines", "simulate"),
     ("pipeline", "validation_plan"),
     ("studies", "errata", "initial_report", "verify", "report", "bench", "validation", "validation_report",
      "describe"),

@@ -41,7 +41,8 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
                     max_evaluations, min_step, max_output_bytes, names: Mapping[str, str] | None = None) -> dict:
     """:func:`simulate`'s arguments checked before any work: types, ranges, choices, and the combinations
     that would be silently ignored (a step for an adaptive integrator, a width or sgn the friction treatment
-    does not use, a step or output step longer than the horizon). Returns the numbers converted.
+    does not use, a step or output step longer than the horizon ``t_end``; None: a run specification's checks,
+    without its horizon). Returns the numbers converted.
 
     ``names`` maps an argument to the way the user gave it (the command line passes its flags)."""
     from study.solver.accelerations import ACCELERATION_SOLVERS
@@ -56,7 +57,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
     def n(key, value, **kw):
         return arguments.number(w(key), value, **kw)
 
-    given = {"t_end": n("t_end", t_end), "output_step": n("output_step", output_step),
+    given = {"t_end": n("t_end", t_end, optional=True), "output_step": n("output_step", output_step),
              "rtol": n("rtol", rtol, optional=True), "atol": n("atol", atol, optional=True),
              "step": n("step", step, optional=True), "friction_eps": n("friction_eps", friction_eps, optional=True),
              "max_evaluations": n("max_evaluations", max_evaluations, whole=True, optional=True),
@@ -83,7 +84,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
             raise ValueError(f"{w('integrator')} {integrator} is fixed-step: give {w('step')} (the step size h > 0)")
         if rtol is not None or atol is not None:
             raise ValueError(f"{w('rtol')}/{w('atol')} do not apply to {w('integrator')} {integrator} (fixed step)")
-        if given["step"] > t_end:
+        if t_end is not None and given["step"] > t_end:
             raise ValueError(f"{w('step')} = {step:g} s is longer than {w('t_end')} = {t_end:g} s: {integrator} would "
                              f"take one shortened step")
     elif step is not None:
@@ -100,7 +101,7 @@ def check_arguments(*, t_end, method, integrator, rtol, atol, step, output_step,
         for name, value, why, given_here in not_for_index3:
             if given_here:
                 raise ValueError(f"{name} = {value!r} does not apply to {w('integrator')} ALI3P: {why}")
-    if given["output_step"] > t_end:
+    if t_end is not None and given["output_step"] > t_end:
         raise ValueError(f"{w('output_step')} = {output_step:g} s is longer than {w('t_end')} = {t_end:g} s (the result "
                          f"would hold only t = 0 and t_end)")
     if friction == DEFAULT_FRICTION:   # the parameter set's treatment: its combinations are checked once it is known

@@ -23,7 +23,7 @@ def exudyn_steps(s, solvers: int) -> tuple[list[int], int]:
 
 def check_plan(mech, s, inhouse: dict[str, dict], solvers: int) -> str:
     """Refuse a validation whose work exceeds a bound, before any run; return the plan's one-line estimate."""
-    from study.simulate import FIXED_STEP, fixed_step_evaluations, format_bytes, output_size
+    from study.run_arguments import FIXED_STEP, fixed_step_evaluations, format_bytes, output_size
 
     eom, state = mech.equations(), mech.initial_state()
     problems = []

@@ -26,33 +26,38 @@ from study.results import SimulationResult
 
 
 def run_case(case: Case) -> SimulationResult:
-    """Compute one case (in whatever process the executor chose)."""
+    """Compute one case (in whatever process the executor chose): its options are a serialized run specification
+    (:func:`study.engines.spec_from_dict`, engine ``case.engine``), run by :func:`study.engines.run`."""
+    from study.engines.runner import run, spec_from_dict
     from study.mechanisms import named_mechanism
 
     mech = named_mechanism(case.mechanism, case.variant)
     options = case.kwargs
     options.pop("repeat", None)  # the k-th timing of the same run (a key of its own, the same result)
+    q0 = qd0 = None
     if case.engine == "inhouse":
-        from study.simulate import simulate
+        q0, qd0 = initial_state(case, mech, options)
+    return run(mech, spec_from_dict({"engine": case.engine, **options}), case.t_end, q0=q0, qd0=qd0)
 
-        initial = options.pop("initial", "consistent")
-        ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
-        if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
-            ic = mech.parameters.initial
-            # off the constraints on purpose (the study shows what that does): the check would refuse it
-            options.update(q0=list(ic.printed_q), qd0=list(ic.printed_qd), check=False)
-        elif initial != "consistent":
-            raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
-        if ulps:
-            if "q0" not in options:
-                state = mech.initial_state()
-                options.update(q0=state.q, qd0=state.qd)
-            options.update({k: np.add(options[k], ulps * np.spacing(np.asarray(options[k], float))) for k in ("q0", "qd0")})
-        return simulate(mech, t_end=case.t_end, **options)
-    from study import exudyn_models
 
-    h = options.pop("h")
-    return exudyn_models.run(mech, case.t_end, h, **options)
+def initial_state(case: Case, mech, options: dict) -> tuple:
+    """An in-house case's initial state (None: the mechanism's consistent one), from its options ``initial``,
+    ``perturb_ulps``, ``q0`` and ``qd0`` (consumed; 'printed' also sets ``check`` False)."""
+    initial = options.pop("initial", "consistent")
+    ulps = options.pop("perturb_ulps", 0)  # conditioning check (study.verify): q0, qd0 moved by ulps
+    q0, qd0 = options.pop("q0", None), options.pop("qd0", None)
+    if initial == "printed":  # the paper's printed state, used as is (see the parameter file)
+        ic = mech.parameters.initial
+        # off the constraints on purpose (the study shows what that does): the check would refuse it
+        q0, qd0, options["check"] = list(ic.printed_q), list(ic.printed_qd), False
+    elif initial != "consistent":
+        raise ValueError(f"case {case.name}: initial = {initial!r} must be 'consistent' or 'printed'")
+    if ulps:
+        if q0 is None:
+            state = mech.initial_state()
+            q0, qd0 = state.q, state.qd
+        q0, qd0 = (np.add(x, ulps * np.spacing(np.asarray(x, float))) for x in (q0, qd0))
+    return q0, qd0
 
 
 def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:

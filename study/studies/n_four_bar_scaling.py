@@ -11,7 +11,7 @@ in a fresh process with an empty code cache (so nothing is reused between sizes)
 * ``exudyn_cpu_per_s``: the same for Exudyn index 3, h = 1e-3 s (or its error).
 
 CPU times are process times on the machine that ran it, with one BLAS thread as ``simulate`` uses
-(:func:`study.simulate.one_blas_thread`). The table is written to
+(:func:`study.engines.runner.one_blas_thread`). The table is written to
 ``reports/tables/singular_four_bar_scaling.csv``. Run: ``python -m study.studies.n_four_bar_scaling``
 (~10 min on 2 cores). Not a cached pipeline study: the quantities measured are the costs themselves.
 """
@@ -30,7 +30,7 @@ import pandas as pd
 
 from study.locations import REPORTS_DIR
 from study.pipeline.tables import write_table
-from study.simulate import one_blas_thread
+from study.engines.runner import one_blas_thread
 
 VARIANTS = (("seed", 2.0), ("n5", 2.0), ("n10", 2.0), ("n20", 1.0), ("n40", 1.0))
 OUT = REPORTS_DIR / "tables" / "singular_four_bar_scaling.csv"

@@ -306,7 +306,7 @@ def _scaling_lines(scaling: pd.DataFrame | None) -> list[str]:
             "Exudyn: index 3, h = 1e-3 s):", "", md_table(header, rows, [True] * len(header)), "",
             "CPU times are process times measured on the shared 2-core machine (`python -m "
             "study.studies.n_four_bar_scaling`, each size in a fresh process with an empty code cache), with "
-            "one BLAS thread as every simulation here runs (`study.simulate.one_blas_thread`): from N = 40 "
+            "one BLAS thread as every simulation here runs (`study.engines.runner.one_blas_thread`): from N = 40 "
             "OpenBLAS would split the augmented Lagrangian's Φ_qᵀΦ_q over two threads, whose waiting for a "
             "busy core counts as process time and made one evaluation an order of magnitude slower. "
             "The horizons hold one or two singular positions, whose neighbourhoods take most of the "
