@@ -4,8 +4,9 @@
 ``study.kernels``. Modules, one concern each:
 
 codegen
-    sympy -> CSE -> a numba module per mechanism description (``evaluate``, ``indicators``, ``kinematics``);
-    the load laws are the description's expressions, compiled with the rest.
+    The numba module of a mechanism description (``evaluate``, ``indicators``, ``kinematics``), written by
+    study.model.codegen (the one generator, shared with the reference) and loaded here; the load laws are the
+    description's expressions, compiled with the rest.
 user
     A user's EquationsOfMotion compiled from its callables.
 dynamics

@@ -1,6 +1,6 @@
 """Compiled kernels of a user's EquationsOfMotion written as plain callables.
 
-A described mechanism's kernels are generated from its description (:mod:`study.fast.codegen`). A
+A described mechanism's kernels are generated from its description (:mod:`study.model.codegen`). A
 user's equations have none: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
 as they are and wrapped into kernels of the generated ones' signatures
 (:mod:`study.kernels.signatures`), so the same compiled loop runs them. The callables must be in the

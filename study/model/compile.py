@@ -1,10 +1,10 @@
-"""Generate numeric code from the symbolic equations once, cache it on disk, bind parameters.
+"""The reference path's equations of a description: its generated module, cached on disk, bound to parameters.
 
-The generated module (plain Python with ``math`` scalar functions after common-subexpression
-elimination) is keyed by a hash of the symbolic description, of this package's source and of sympy's
-version, and stored under the cache folder
-(``study.cache_folder.cache_dir()``: ``$STUDY_CACHE_DIR``, ``.cache`` in a checkout, or the user's cache
-folder)/codegen, so the sympy derivation is paid once.
+The module (plain Python with ``math`` scalar functions after common-subexpression elimination, written by
+:func:`study.model.codegen.reference_source`) is keyed by a hash of the symbolic description, of this package's
+source and of sympy's version (:func:`description_key`, which the compiled module's key includes too), and stored
+under the cache folder (``study.cache_folder.cache_dir()``: ``$STUDY_CACHE_DIR``, ``.cache`` in a checkout, or the
+user's cache folder)/codegen, so the sympy derivation is paid once.
 Parameters stay symbolic in the generated code; every variant reuses it.
 """
 
@@ -12,20 +12,20 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import re
 from pathlib import Path
 from types import ModuleType
 
 import numpy as np
 import sympy as sp
-from sympy.printing.pycode import PythonCodePrinter
 
 from study.cache_folder import cache_dir  # noqa: F401  (the cache root; imported from here by callers)
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
-from study.model.derive import SymbolicEquations, derive
+from study.model.codegen import reference_source
+from study.model.derive import derive
 from study.model.eom import EquationsOfMotion, FrictionalPin, SlidingContact
 from study.sources import source_files, source_hash
+
 
 def _generator_source() -> str:
     """The source of the derivation and code generation (study/model/*.py) and sympy's version."""
@@ -49,92 +49,6 @@ def description_key(b: MechanismBuilder) -> str:
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
-class _Printer(PythonCodePrinter):
-    def _print_Symbol(self, expr):  # symbols are plain local names in the generated code
-        return expr.name
-
-
-def function_name(name: str) -> str:
-    """A valid Python identifier for a generated function named ``name`` (points are 'body.point')."""
-    return re.sub(r"\W", "_", name)
-
-
-def _function(name: str, args: str, unpack: list[str], exprs: sp.Matrix, shape: tuple[int, ...]) -> str:
-    printer = _Printer({"fully_qualified_modules": True})
-    flat = list(exprs)
-    lines = [f"    def {function_name(name)}({args}):"] + [f"        {u}" for u in unpack]
-    if flat:
-        replacements, reduced = sp.cse(flat, symbols=sp.numbered_symbols("x_"), optimizations="basic")
-        for sym, e in replacements:
-            lines.append(f"        {sym} = {printer.doprint(e)}")
-    else:
-        reduced = []
-    if shape == ():
-        lines.append(f"        return {printer.doprint(reduced[0])}")
-    else:
-        lines.append(f"        out = np.zeros({shape})")
-        for idx, e in zip(np.ndindex(*shape), reduced):
-            if e != 0:
-                lines.append(f"        out[{', '.join(map(str, idx))}] = {printer.doprint(e)}")
-        lines.append("        return out")
-    return "\n".join(lines)
-
-
-def generate_source(b: MechanismBuilder, eqs: SymbolicEquations) -> str:
-    """Python source of a module with ``bind(p) -> dict[name, function]``."""
-    m = len(b.q)
-    qn = ", ".join(str(s) for s in b.q) + ("," if m == 1 else "")
-    qdn = ", ".join(str(s) for s in b.qd) + ("," if m == 1 else "")
-    uq, uqd = [f"{qn} = q"], [f"{qdn} = qd"]
-    r = eqs.phi.shape[0]
-    funcs = [
-        _function("mass", "q", uq, eqs.mass, (m, m)),
-        _function("velocity_terms", "q, qd", uq + uqd, eqs.velocity_terms, (m,)),
-        _function("potential", "q", uq, sp.Matrix([eqs.potential]), ()),
-        _function("potential_gradient", "q", uq, eqs.potential_gradient, (m,)),
-        _function("phi", "q", uq, eqs.phi, (r,)),
-        _function("phi_q", "q", uq, eqs.phi_q, (r, m)),
-        _function("gamma", "q, qd", uq + uqd, eqs.gamma, (r,)),
-    ]
-    names = ["mass", "velocity_terms", "potential", "potential_gradient", "phi", "phi_q", "gamma"]
-    modes = [m for _, _, m in b.switches]
-    um = [f"{', '.join(str(x) for x in modes)}{',' if len(modes) == 1 else ''} = mode"] if modes else []
-    for name, expr in eqs.loads.items():
-        funcs.append(_function(f"load__{name}", "t, q, qd, mode", uq + uqd + um, expr, (m,)))
-        names.append(f"load__{name}")
-    funcs.append(_function("indicators", "t, q, qd", uq + uqd, eqs.indicators, (len(modes),)))
-    names.append("indicators")
-    for c in b.contacts:
-        if c.guide is not None:   # a moving guide's J_t and Jdot_t qd (a fixed guide's come from its point's)
-            funcs.append(_function(f"contact_jac__{c.name}", "q", uq, eqs.contact_jacobians[c.name], (m,)))
-            funcs.append(_function(f"contact_bias__{c.name}", "q, qd", uq + uqd,
-                                   sp.Matrix([eqs.contact_bias[c.name]]), ()))
-            names += [f"contact_jac__{c.name}", f"contact_bias__{c.name}"]
-    for body in b.bodies:
-        funcs.append(_function(f"angle__{body.name}", "q", uq, sp.Matrix([body.angle]), ()))
-        funcs.append(_function(f"angle_jac__{body.name}", "q", uq, eqs.angle_jacobians[body.name], (m,)))
-        bias = (eqs.angle_jacobians[body.name] * b.qd).jacobian(b.q) * b.qd
-        funcs.append(_function(f"angle_bias__{body.name}", "q, qd", uq + uqd, bias, ()))
-        names += [f"angle__{body.name}", f"angle_jac__{body.name}", f"angle_bias__{body.name}"]
-    for pt in b.points:
-        funcs.append(_function(f"pos__{pt.name}", "q", uq, eqs.point_positions[pt.name], (2,)))
-        funcs.append(_function(f"jac__{pt.name}", "q", uq, eqs.point_jacobians[pt.name], (2, m)))
-        funcs.append(_function(f"bias__{pt.name}", "q, qd", uq + uqd, eqs.point_bias[pt.name], (2,)))
-        names += [f"pos__{pt.name}", f"jac__{pt.name}", f"bias__{pt.name}"]
-    params = sorted(vars(b.p))
-    header = [
-        f'"""Generated by study.model.compile for mechanism {b.name!r}. Do not edit."""',
-        "import math",
-        "import numpy as np",
-        f"PARAMETERS = {params!r}",
-        "",
-        "def bind(p):",
-        "    " + (", ".join(f"p_{k}" for k in params) + ("," if len(params) == 1 else "") + " = p" if params else "pass"),
-    ]
-    footer = "    return {" + ", ".join(f"{n!r}: {function_name(n)}" for n in names) + "}\n"
-    return "\n".join(header) + "\n" + "\n".join(funcs) + "\n" + footer
-
-
 def _load_module(path: Path, key: str) -> ModuleType:
     spec = importlib.util.spec_from_file_location(f"study_codegen_{key}", path)
     module = importlib.util.module_from_spec(spec)
@@ -147,8 +61,53 @@ def generated_module(b: MechanismBuilder) -> ModuleType:
     key = description_key(b)
     folder = cache_dir() / "codegen"
     path = folder / f"{b.name}_{key}.py"
-    ensure_generated(path, lambda: generate_source(b, derive(b)))  # checksum-verified; regenerated if it fails
+    ensure_generated(path, lambda: reference_source(b, derive(b)))  # checksum-verified; regenerated if it fails
     return _load_module(path, key)
+
+
+def _sliding_contacts(b: MechanismBuilder, f: dict, subs: dict) -> list[SlidingContact]:
+    """The sliding contacts with their tangent Jacobians and biases from the generated functions ``f``."""
+    contacts = []
+    for c in b.contacts:
+        if c.guide is None:   # fixed guide: the constant tangent times the point's Jacobian and bias
+            tangent = np.array([float(sp.sympify(v).subs(subs)) for v in c.tangent])
+            jac, bias = f[f"jac__{c.point.name}"], f[f"bias__{c.point.name}"]
+            tangent_jacobian = lambda q, jac=jac, tangent=tangent: tangent @ jac(q)  # noqa: E731
+            tangent_bias = lambda q, qd, bias=bias, tangent=tangent: float(tangent @ bias(q, qd))  # noqa: E731
+        else:                 # moving guide: the generated J_t and Jdot_t qd of the velocity relative to it
+            tangent_jacobian = f[f"contact_jac__{c.name}"]
+            tangent_bias = lambda q, qd, bias=f[f"contact_bias__{c.name}"]: float(bias(q, qd))  # noqa: E731
+        contacts.append(SlidingContact(
+            name=c.name,
+            constraint_index=[name for name, _ in b.constraints].index(c.name),
+            tangent_jacobian=tangent_jacobian,
+            tangent_bias=tangent_bias,
+            mu_static=float(c.mu_static.subs(subs)),
+            mu_kinetic=float(c.mu_kinetic.subs(subs)),
+            resistance=float(c.resistance.subs(subs)),
+        ))
+    return contacts
+
+
+def _pin_frictions(b: MechanismBuilder, f: dict, subs: dict) -> list[FrictionalPin]:
+    """The revolute joints with friction with their rate Jacobians and biases from the generated functions ``f``."""
+    constraint_names = [name for name, _ in b.constraints]
+    pins = []
+    for pin in b.pin_frictions:
+        jacs = [None if body is None else f[f"angle_jac__{body.name}"] for body in (pin.body_a, pin.body_b)]
+        biases = [None if body is None else f[f"angle_bias__{body.name}"] for body in (pin.body_a, pin.body_b)]
+
+        def rate_jacobian(q, ja=jacs[0], jb=jacs[1], m=len(b.q)):   # d(omega_a - omega_b)/dqd
+            out = np.zeros(m) if ja is None else np.array(ja(q), dtype=float)
+            return out if jb is None else out - jb(q)
+
+        def rate_bias(q, qd, ba=biases[0], bb=biases[1]):           # omega_rel' - rate_jacobian(q) @ qdd
+            return (0.0 if ba is None else float(ba(q, qd))) - (0.0 if bb is None else float(bb(q, qd)))
+
+        values = {k: float(getattr(pin, k).subs(subs)) for k in ("mu_static", "mu_kinetic", "radius", "torque")}
+        pins.append(FrictionalPin(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
+                                rate_jacobian=rate_jacobian, rate_bias=rate_bias, **values))
+    return pins
 
 
 def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> EquationsOfMotion:
@@ -174,46 +133,6 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
             total += gen
         return total
 
-    indicators = live_indicators if b.switches else None
-    indicator_names = tuple(name for name, _, _ in b.switches)
-
-    contacts = []
-    for c in b.contacts:
-        if c.guide is None:   # fixed guide: the constant tangent times the point's Jacobian and bias
-            tangent = np.array([float(sp.sympify(v).subs(subs)) for v in c.tangent])
-            jac, bias = f[f"jac__{c.point.name}"], f[f"bias__{c.point.name}"]
-            tangent_jacobian = lambda q, jac=jac, tangent=tangent: tangent @ jac(q)  # noqa: E731
-            tangent_bias = lambda q, qd, bias=bias, tangent=tangent: float(tangent @ bias(q, qd))  # noqa: E731
-        else:                 # moving guide: the generated J_t and Jdot_t qd of the velocity relative to it
-            tangent_jacobian = f[f"contact_jac__{c.name}"]
-            tangent_bias = lambda q, qd, bias=f[f"contact_bias__{c.name}"]: float(bias(q, qd))  # noqa: E731
-        contacts.append(SlidingContact(
-            name=c.name,
-            constraint_index=[name for name, _ in b.constraints].index(c.name),
-            tangent_jacobian=tangent_jacobian,
-            tangent_bias=tangent_bias,
-            mu_static=float(c.mu_static.subs(subs)),
-            mu_kinetic=float(c.mu_kinetic.subs(subs)),
-            resistance=float(c.resistance.subs(subs)),
-        ))
-
-    constraint_names = [name for name, _ in b.constraints]
-    pins = []
-    for pin in b.pin_frictions:
-        jacs = [None if body is None else f[f"angle_jac__{body.name}"] for body in (pin.body_a, pin.body_b)]
-        biases = [None if body is None else f[f"angle_bias__{body.name}"] for body in (pin.body_a, pin.body_b)]
-
-        def rate_jacobian(q, ja=jacs[0], jb=jacs[1], m=len(b.q)):   # d(omega_a - omega_b)/dqd
-            out = np.zeros(m) if ja is None else np.array(ja(q), dtype=float)
-            return out if jb is None else out - jb(q)
-
-        def rate_bias(q, qd, ba=biases[0], bb=biases[1]):           # omega_rel' - rate_jacobian(q) @ qdd
-            return (0.0 if ba is None else float(ba(q, qd))) - (0.0 if bb is None else float(bb(q, qd)))
-
-        values = {k: float(getattr(pin, k).subs(subs)) for k in ("mu_static", "mu_kinetic", "radius", "torque")}
-        pins.append(FrictionalPin(name=pin.name, rows=tuple(constraint_names.index(r) for r in pin.rows),
-                                rate_jacobian=rate_jacobian, rate_bias=rate_bias, **values))
-
     return EquationsOfMotion(
         n_coordinates=len(b.q),
         n_constraints=len(b.constraints),
@@ -225,12 +144,12 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
         name=b.name,
         coordinate_names=b.coordinate_names,
         constraint_names=tuple(name for name, _ in b.constraints),
-        contacts=tuple(contacts),
-        pin_frictions=tuple(pins),
+        contacts=tuple(_sliding_contacts(b, f, subs)),
+        pin_frictions=tuple(_pin_frictions(b, f, subs)),
         potential_energy=f["potential"],
         applied_forces=applied_forces,
-        indicators=indicators,
-        indicator_names=indicator_names,
+        indicators=live_indicators if b.switches else None,
+        indicator_names=tuple(name for name, _, _ in b.switches),
         parameter_hash=parameter_hash,
         points={pt.name: f[f"pos__{pt.name}"] for pt in b.points},
         kinematics=f,

@@ -43,6 +43,7 @@ class SymbolicEquations:
     point_jacobians: dict[str, sp.Matrix]       # (2, m)
     point_bias: dict[str, sp.Matrix]            # (2, 1)  Jdot qd
     angle_jacobians: dict[str, sp.Matrix]       # (1, m)  per body
+    angle_bias: dict[str, sp.Expr]              # jdot qd  per body
     loads: dict[str, sp.Matrix]                 # (m, 1)  generalized force of every applied load
     indicators: sp.Matrix                       # (k, 1)  switching functions of the loads
     contact_jacobians: dict[str, sp.Matrix] = None   # (1, m)  J_t of every sliding contact
@@ -62,14 +63,15 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
     mass = sp.zeros(m, m)
     vel = sp.zeros(m, 1)
     potential = sp.Integer(0)
-    angle_jacobians = {}
+    angle_jacobians, angle_bias = {}, {}
     for body in b.bodies:
         r = sp.Matrix([body.x, body.y])
         jr = r.jacobian(q)
         ja = sp.Matrix([body.angle]).jacobian(q)
-        angle_jacobians[body.name] = ja
+        jb = _bias(ja, q, qd)
+        angle_jacobians[body.name], angle_bias[body.name] = ja, jb[0]
         mass += body.mass * jr.T * jr + body.inertia * ja.T * ja
-        vel += body.mass * jr.T * _bias(jr, q, qd) + body.inertia * ja.T * _bias(ja, q, qd)
+        vel += body.mass * jr.T * _bias(jr, q, qd) + body.inertia * ja.T * jb
         if b.gravity_g is not None:
             potential += body.mass * b.gravity_g * body.y
     for _, expr in b.potentials:
@@ -124,6 +126,7 @@ def derive(b: MechanismBuilder) -> SymbolicEquations:
         point_jacobians=jacobians,
         point_bias=bias,
         angle_jacobians=angle_jacobians,
+        angle_bias=angle_bias,
         loads=loads,
         indicators=indicators,
         contact_jacobians=contact_jacobians,
