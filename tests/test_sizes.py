@@ -26,7 +26,6 @@ STUDY = Path(__file__).resolve().parents[1] / "study"
 #: "<path under study/>" (a module, its lines) or "<path under study/>::<qualified name>" (a function, its lines)
 KNOWN = {
     "cli.py::build_parser": 113,
-    "fast/dynamics.py::_friction": 103,
     "fast/loop.py::integrate_segment": 156,
     "model/compile.py::compile_description": 84,
     "params.py::parse_parameters": 104,
