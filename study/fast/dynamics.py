@@ -36,6 +36,7 @@ from study.kernels.linalg import lu_factor, lu_solve
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
 from study.laws.contact import (CONVERGED, OK, PIN_MAX_ITERATIONS, PIN_NOT_CONVERGED, SCRATCH_ROWS, SINGULAR,
                                 STEP_FAILED, active_entries, contact_forces, pin_newton_step)
+from study.laws.friction import pin_norm
 
 # --- option layout ---------------------------------------------------------------------------
 CI_PROJECTS, CI_BIAS, CI_FRICTION, CI_SWITCHED, CI_PHASES = range(5)
@@ -177,8 +178,7 @@ def _pins(ci, cf, ws, m, r, nc, npin):
                                   cf[po + 2 * npin:po + 3 * npin], delta, rtol, norm, res, step, jac, ws.pivA)
         if outcome == CONVERGED:
             for k in range(npin):
-                rx, ry = ws.lam[rows[2 * k]], ws.lam[rows[2 * k + 1]]
-                ws.normal[nc + k] = np.sqrt(rx * rx + ry * ry)
+                ws.normal[nc + k] = pin_norm(ws.lam[rows[2 * k]], ws.lam[rows[2 * k + 1]], 0.0)   # |R|
                 if not ws.stick[nc + k]:
                     ws.f[nc + k] = tau[k]
             return OK

@@ -274,7 +274,7 @@ class FrictionDynamics(Dynamics):
                 R = sol.lam[self._pin_rows]                  # (np, 2)
                 tau = np.zeros(len(pins))
                 tau[free], tau[held] = tau_f, -sol.lam[r:]
-                normal = np.concatenate([sol.normal, np.sqrt(np.sum(R ** 2, axis=1))])
+                normal = np.concatenate([sol.normal, pin_norm.py_func(R[:, 0], R[:, 1], 0.0)])   # |R|
                 margin = np.where(stick, self.static_limit(normal) - np.abs(np.concatenate([sol.friction, tau])),
                                   np.nan)
                 return ContactSolution(sol.qdd, sol.lam[:r], normal, np.concatenate([sol.friction, tau]), v,
