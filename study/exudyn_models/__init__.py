@@ -18,7 +18,7 @@ building
     Model building blocks: planar rigid bodies, joints, loads, sensors read back as arrays.
 guards
     The guarded joint-reaction reading in a user function, and the regularized friction along a guide and in a
-    revolute joint (the law itself from its one home, study.solver.friction.laws and study.kernels.signs).
+    revolute joint (the law itself from its one home, study.laws.friction and study.kernels.signs).
 solve
     Running a built model (SolveDynamic, CPU timing) and assembling the SimulationResult from its series.
 translate

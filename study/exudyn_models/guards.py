@@ -1,9 +1,9 @@
 """The guarded reading of a joint reaction inside a user function, and the regularized friction laws built on it:
 along a guide (:class:`GuideFriction`) and in a revolute joint (:class:`PinFrictionTorque`).
 
-The law itself is not written here: the friction level is :func:`study.solver.friction.laws.friction_level` (and a
-pin's |R|_delta :func:`study.solver.friction.laws.pin_norm`), run as their Python source (``py_func``) as the
-reference path runs them, and the regularized sign tanh(v/eps) is ``study.kernels.signs.SIGN_FUNCTIONS['tanh']``, the
+The law itself is not written here: the friction level is :func:`study.laws.friction.friction_level` (and a
+pin's |R|_delta :func:`study.laws.friction.pin_norm`), run as their Python source (``py_func``) on Exudyn's scalars,
+and the regularized sign tanh(v/eps) is ``study.kernels.signs.SIGN_FUNCTIONS['tanh']``, the
 compiled function itself (libm's tanh, as the compiled loop; its ``py_func`` would run NumPy's tanh, which differs
 from libm's by one unit in the last place at about one argument in ten).
 """
@@ -18,7 +18,7 @@ import exudyn as exu
 from study.exudyn_models.building import Model
 from study.exudyn_models.settings import SEED_MAX_ITERATIONS, SEED_TOLERANCE
 from study.kernels.signs import SIGN_FUNCTIONS
-from study.solver.friction.laws import friction_level, pin_norm
+from study.laws.friction import friction_level, pin_norm
 
 OVT = exu.OutputVariableType
 #: the friction laws' one home (see the module docstring)

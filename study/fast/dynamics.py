@@ -5,20 +5,20 @@ Same equations as ``study.solver.dynamics.Dynamics`` with the ``multiplier`` acc
 
     [[M, Phi_q^T], [Phi_q, 0]] [qdd; lambda] = [Q + sum_j Jt_j^T f_j; gamma + b(Phi, Phidot)]
 
-with the contacts' tangential forces f found per normal-force sign hypothesis by superposition
-(see the reference module's docstring; the hypotheses are visited in the same order and the same
-consistency rule picks exactly one, else a Painleve status is returned).
+with the contacts' tangential forces f found per normal-force sign hypothesis by superposition: the contact solve
+is ``study.laws.contact`` (its one home, which the reference path calls too; a failure is a Painleve status).
 
 Revolute joints with friction (pins) follow the sliding contacts in every per-contact array: the generated
 ``evaluate`` appends each pin's rate Jacobian P_p to Jt and its rate bias to bt, so v_t ends with the pins'
 relative rates omega_p, and a stuck pin (exact treatment) is a stuck row of the contacts' solve (its multiplier is
 the torque that keeps P_p qdd + rate_bias_p = 0). A sliding pin's torque tau_p = -(mu_k r |R_p|_delta + T0) s_p
 enters as the generalized force P_p^T tau_p and is solved by Newton around the contacts' solve, with the
-reference's iteration (``FrictionDynamics._solve_pins``: start, Jacobian, stopping rule, iteration bound).
+reference's start and iteration bound (``FrictionDynamics._solve_pins``) and the shared Newton iterate
+(``study.laws.contact.pin_newton_step``: Jacobian, stopping rule).
 
 The laws arrive as compiled functions of their classes, passed as first-class functions: the
 stabilization's ``compiled_bias`` (``study.solver.stabilization``) and the friction treatment's
-``compiled_phases`` (``study.solver.friction.laws``: stick flags and slip factors of the contacts).
+``compiled_phases`` (``study.laws.friction``: stick flags and slip factors of the contacts).
 Options travel in two arrays, ``ci`` (int64) and ``cf`` (float64), whose layout is given by the
 ``CI_*`` / ``CF_*`` constants below and packed by ``study.fast.frontend``. State y = [q, qd, W_loads,
 W_friction (only with friction)], as in the reference.
@@ -34,9 +34,9 @@ from numba import types
 from study.kernels.cache import internal, kernel
 from study.kernels.linalg import lu_factor, lu_solve
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
-from study.solver.friction import CONSISTENCY_RTOL  # the same sign-consistency rule
-from study.solver.friction.contact import PIN_MAX_ITERATIONS  # the same bound on the pins' Newton iterations
-from study.solver.friction.laws import friction_level, pin_norm  # each written once for both backends
+from study.laws.contact import (CONVERGED, OK, PIN_MAX_ITERATIONS, PIN_NOT_CONVERGED, SCRATCH_ROWS, SINGULAR,
+                                STEP_FAILED, active_entries, contact_forces, pin_newton_step)
+from study.laws.friction import pin_norm
 
 # --- option layout ---------------------------------------------------------------------------
 CI_PROJECTS, CI_BIAS, CI_FRICTION, CI_SWITCHED, CI_PHASES = range(5)
@@ -49,17 +49,14 @@ CF_PROJ_TOL, CF_HEADER = 0, 1
 # cf after the header: mu_kinetic (nc), mu_static (nc), resistance (nc), then the pins' block (pin_block): mu_static
 # radius (np), mu_kinetic radius (np), torque T0 (np), delta, rtol; then the bias parameters, the friction parameters
 
-# status codes
-OK, SINGULAR, PAINLEVE_NONE, PAINLEVE_MANY, PIN_NOT_CONVERGED = 0, 1, 2, 3, 4
-
-# ws.pin, per pin (blocks of np): the slip factor s, the torque tau, the Newton residual F, |R|_delta (block PIN_NORM);
-# then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np). Kept in one array: every call
-# that passes the workspace pays per array in it (reference counts), pins or not.
-PIN_SLIP, PIN_TAU, PIN_RESIDUAL, PIN_NORM, PIN_MATRICES = range(5)
+# ws.pin, per pin (blocks of np): the slip factor s, the torque tau, the Newton residual F, |R|_delta (block PIN_NORM),
+# the Newton step; then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np). Kept in one array:
+# every call that passes the workspace pays per array in it (reference counts), pins or not.
+PIN_SLIP, PIN_TAU, PIN_RESIDUAL, PIN_NORM, PIN_STEP, PIN_MATRICES = range(6)
 Workspace = namedtuple("Workspace", [
     "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "phidot", "K", "piv", "x",
-    "qdd", "lam", "U", "L", "A", "b", "pivA", "best", "sigma", "best_sigma", "normal", "tol",
-    "best_normal", "best_tol", "f", "vt", "stick", "s", "pin", "at", "counters"])
+    "qdd", "lam", "U", "L", "A", "pivA", "active", "scratch", "normal", "f", "vt", "stick", "s", "pin", "at",
+    "counters"])
 
 
 @internal()
@@ -72,9 +69,8 @@ def workspace(m, r, nc, nw, npin):
         np.zeros((nt, m)), np.zeros(nt), np.zeros(nw), np.zeros(r), np.zeros(r), np.zeros((n, n)),
         np.zeros(n, np.int64),
         np.zeros(n), np.zeros(m), np.zeros(r), np.zeros((m, nt)), np.zeros((r, nt)), np.zeros((nt, nt)),
-        np.zeros(nt), np.zeros(nt, np.int64), np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt),
-        np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt),
-        np.zeros(nt, np.bool_), np.zeros(nt), np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1),
+        np.zeros(nt, np.int64), np.zeros(nt, np.int64), np.zeros((SCRATCH_ROWS, nt)), np.zeros(nt), np.zeros(nt),
+        np.zeros(nt), np.zeros(nt, np.bool_), np.zeros(nt), np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1),
         np.zeros(2, np.int64))
 
 
@@ -113,25 +109,12 @@ def no_phases(mode, nlm, vt, cf, off, stick, s):
 
 @internal()
 def _friction(ci, cf, ws, m, r, nc):
-    """The coupled normal-force / friction problem (study.solver.friction.FrictionDynamics._solve) on top of the
-    solution without tangential forces in ws.qdd, ws.lam. The rows of Jt with a tangential force are the stuck ones
-    and the sliding ones with s != 0; sliding rows are contacts (j < nc), a stuck row may be a pin's."""
-    nt = ws.Jt.shape[0]
-    off = CF_HEADER
-    n_act = 0
-    active = np.empty(nt, np.int64)
-    for j in range(nt):
-        if ws.stick[j] or ws.s[j] != 0.0:
-            active[n_act] = j
-            n_act += 1
-    for j in range(nt):
-        ws.f[j] = 0.0
-    if n_act == 0:
-        for j in range(nc):
-            ws.normal[j] = -ws.lam[ci[CI_CONTACT0 + j]]
-        return OK
+    """The coupled normal-force / friction problem (``study.laws.contact.contact_forces``) on top of the solution
+    without tangential forces in ws.qdd, ws.lam. The rows of Jt with a tangential force are the stuck ones and the
+    sliding ones with s != 0; sliding rows are contacts (j < nc), a stuck row may be a pin's."""
+    n_act = active_entries(ws.stick, ws.s, ws.active)
     for col in range(n_act):  # response to a unit tangential force at row active[col]
-        j = active[col]
+        j = ws.active[col]
         for i in range(m):
             ws.x[i] = ws.Jt[j, i]
         for i in range(r):
@@ -141,90 +124,21 @@ def _friction(ci, cf, ws, m, r, nc):
             ws.U[i, col] = ws.x[i]
         for i in range(r):
             ws.L[i, col] = ws.x[m + i]
-    assumed = np.empty(n_act, np.int64)
-    n_ass = 0
-    for col in range(n_act):
-        j = active[col]
-        if not ws.stick[j] and cf[off + j] > 0.0:
-            assumed[n_ass] = col
-            n_ass += 1
-    n_good = 0
-    A, b = ws.A[:n_act, :n_act], ws.b[:n_act]
-    for combo in range(1 << n_ass):  # itertools.product((1, -1), ...) order
-        for col in range(n_act):
-            ws.sigma[col] = 0.0
-        for a in range(n_ass):
-            ws.sigma[assumed[a]] = -1.0 if (combo >> (n_ass - 1 - a)) & 1 else 1.0
-        for row in range(n_act):
-            j = active[row]
-            if ws.stick[j]:
-                acc = ws.bt[j]
-                for i in range(m):
-                    acc += ws.Jt[j, i] * ws.qdd[i]
-                for col in range(n_act):
-                    v = 0.0
-                    for i in range(m):
-                        v += ws.Jt[j, i] * ws.U[i, col]
-                    A[row, col] = v
-                b[row] = -acc
-            else:
-                kj = ci[CI_CONTACT0 + j]
-                w = ws.s[j] * cf[off + j] * ws.sigma[row]
-                for col in range(n_act):
-                    A[row, col] = -w * ws.L[kj, col]
-                A[row, row] += 1.0
-                b[row] = -ws.s[j] * cf[off + 2 * nc + j] + w * ws.lam[kj]
-        if not lu_factor(A, ws.pivA):
-            continue
-        lu_solve(A, ws.pivA, b)
-        consistent = True
-        for row in range(n_act):
-            if active[row] >= nc:   # a stuck pin: no normal force, no sign assumed
-                ws.normal[row], ws.tol[row] = 0.0, 0.0
-                continue
-            kj = ci[CI_CONTACT0 + active[row]]
-            lam_k, scale = ws.lam[kj], abs(ws.lam[kj])
-            for col in range(n_act):
-                lam_k += ws.L[kj, col] * b[col]
-                scale += abs(ws.L[kj, col]) * abs(b[col])
-            ws.normal[row] = -lam_k
-            ws.tol[row] = CONSISTENCY_RTOL * scale
-            if ws.sigma[row] != 0.0 and ws.sigma[row] * ws.normal[row] < -ws.tol[row]:
-                consistent = False
-        if not consistent:
-            continue
-        if n_good == 0:
-            for row in range(n_act):
-                ws.best[row], ws.best_sigma[row] = b[row], ws.sigma[row]
-                ws.best_normal[row], ws.best_tol[row] = ws.normal[row], ws.tol[row]
-        else:  # agree only if every contact whose assumed sign differs is grazing (N = 0) in both
-            for row in range(n_act):
-                if ws.sigma[row] != ws.best_sigma[row]:
-                    if abs(ws.normal[row]) > ws.tol[row] or abs(ws.best_normal[row]) > ws.best_tol[row]:
-                        return PAINLEVE_MANY
-        n_good += 1
-    if n_good == 0:
-        return PAINLEVE_NONE
-    for col in range(n_act):
-        fa = ws.best[col]
-        ws.f[active[col]] = fa
-        for i in range(m):
-            ws.qdd[i] += ws.U[i, col] * fa
-        for i in range(r):
-            ws.lam[i] += ws.L[i, col] * fa
-    for j in range(nc):
-        ws.normal[j] = -ws.lam[ci[CI_CONTACT0 + j]]
-    return OK
+    mu_k, resistance = cf[CF_HEADER:CF_HEADER + nc], cf[CF_HEADER + 2 * nc:CF_HEADER + 3 * nc]
+    return contact_forces(ws.active, n_act, ws.stick, ws.s, ws.Jt, ws.bt, ws.qdd, ws.lam, ws.U, ws.L,
+                          ci[CI_CONTACT0:CI_CONTACT0 + nc], mu_k, resistance, ws.A, ws.pivA, ws.scratch, ws.f,
+                          ws.normal)
 
 
 @internal()
 def _pins(ci, cf, ws, m, r, nc, npin):
-    """The pins' torques (FrictionDynamics._solve_pins): Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s = 0
-    from tau = 0 (ws.qdd, ws.lam hold that solution), the contacts' solve repeated at every iterate. s = 0 for a
-    stuck pin, whose torque is its stuck row's multiplier. Leaves f and normal (|R|) of the pins; PIN_NOT_CONVERGED
-    after PIN_MAX_ITERATIONS, or if the Newton step is singular or not finite."""
+    """The pins' torques (FrictionDynamics._solve_pins): Newton (``study.laws.contact.pin_newton_step``) from
+    tau = 0 (ws.qdd, ws.lam hold that solution), the contacts' solve repeated at every iterate. s = 0 for a stuck
+    pin, whose torque is its stuck row's multiplier. Leaves f and normal (|R|) of the pins; PIN_NOT_CONVERGED after
+    PIN_MAX_ITERATIONS, or if the Newton step is singular or not finite."""
     slip, tau = ws.pin[PIN_SLIP * npin:(PIN_SLIP + 1) * npin], ws.pin[PIN_TAU * npin:(PIN_TAU + 1) * npin]
     res, norm = ws.pin[PIN_RESIDUAL * npin:(PIN_RESIDUAL + 1) * npin], ws.pin[PIN_NORM * npin:(PIN_NORM + 1) * npin]
+    step = ws.pin[PIN_STEP * npin:(PIN_STEP + 1) * npin]
     o = PIN_MATRICES * npin
     Lp = ws.pin[o:o + npin * r].reshape((npin, r))
     jac = ws.pin[o + npin * r:o + npin * (r + npin)].reshape((npin, npin))
@@ -233,7 +147,7 @@ def _pins(ci, cf, ws, m, r, nc, npin):
         ws.s[nc + k] = 0.0
     po = pin_block(nc)
     delta, rtol = cf[po + 3 * npin], cf[po + 3 * npin + 1]
-    row0 = CI_CONTACT0 + nc
+    rows = ci[CI_CONTACT0 + nc:CI_CONTACT0 + nc + 2 * npin]
     for k in range(npin):   # multipliers per unit torque at pin k
         for i in range(m):
             ws.x[i] = ws.Jt[nc + k, i]
@@ -260,35 +174,16 @@ def _pins(ci, cf, ws, m, r, nc, npin):
         status = _friction(ci, cf, ws, m, r, nc)
         if status != OK:
             return status
-        converged = True
-        for k in range(npin):
-            rx, ry = ws.lam[ci[row0 + 2 * k]], ws.lam[ci[row0 + 2 * k + 1]]
-            norm[k] = pin_norm(rx, ry, delta)
-            level = friction_level(cf[po + npin + k], norm[k], cf[po + 2 * npin + k])
-            res[k] = tau[k] + level * slip[k]
-            if not abs(res[k]) <= rtol * max(level, abs(tau[k])):
-                converged = False
-        if converged:
+        outcome = pin_newton_step(ws.lam, rows, Lp, tau, slip, cf[po + npin:po + 2 * npin],
+                                  cf[po + 2 * npin:po + 3 * npin], delta, rtol, norm, res, step, jac, ws.pivA)
+        if outcome == CONVERGED:
             for k in range(npin):
-                rx, ry = ws.lam[ci[row0 + 2 * k]], ws.lam[ci[row0 + 2 * k + 1]]
-                ws.normal[nc + k] = np.sqrt(rx * rx + ry * ry)
+                ws.normal[nc + k] = pin_norm(ws.lam[rows[2 * k]], ws.lam[rows[2 * k + 1]], 0.0)   # |R|
                 if not ws.stick[nc + k]:
                     ws.f[nc + k] = tau[k]
             return OK
-        for i in range(npin):   # I + (mu r s / |R|_delta) R . dR/dtau
-            w = cf[po + npin + i] * slip[i] / norm[i]
-            a, b = ci[row0 + 2 * i], ci[row0 + 2 * i + 1]
-            for j in range(npin):
-                jac[i, j] = w * (ws.lam[a] * Lp[j, a] + ws.lam[b] * Lp[j, b])
-            jac[i, i] += 1.0
-        if not lu_factor(jac, ws.pivA):   # the contacts' solve is done with its pivots until the next iterate
+        if outcome == STEP_FAILED:   # the contacts' solve is done with its pivots until the next iterate
             return PIN_NOT_CONVERGED
-        lu_solve(jac, ws.pivA, res)
-        for k in range(npin):
-            if not np.isfinite(res[k]):
-                return PIN_NOT_CONVERGED
-        for k in range(npin):
-            tau[k] -= res[k]
     return PIN_NOT_CONVERGED
 
 

@@ -26,7 +26,7 @@ from study.fast.project import project
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
-from study.solver.friction.laws import friction_level  # a stuck entry's limit, as the reference
+from study.laws.friction import friction_level  # a stuck entry's limit, as the reference
 from study.solver.integrate import BRENT_RTOL, BRENT_XTOL, SCAN_POINTS  # as the reference loop
 
 # segment outcomes (>= 0) and failures (< 0)

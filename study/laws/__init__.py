@@ -6,5 +6,9 @@ reference path) nor ``study.fast`` (the compiled path) defines a law of its own;
 
 The homes, one module per law:
 
-(filled in as each law moves here)
+- ``study.laws.friction``: the friction level (R + mu |N|, T0 + mu r |R|_delta, and the static limits), a pin's
+  smooth reaction norm |R|_delta, and the friction treatments' phases (stick flags and slip factors);
+- ``study.laws.contact``: the contact and pin solve: the normal-force sign hypotheses of the sliding contacts and
+  their consistency rule (``CONSISTENCY_RTOL``), the choice of exactly one (else Painleve), and the Newton iterate of
+  the pins' friction torques (``PIN_MAX_ITERATIONS``).
 """

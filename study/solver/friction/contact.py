@@ -23,7 +23,9 @@ saddle-point system [[M, J^T], [J, 0]] with the friction column moved to the lef
 reduced to the contacts. A hypothesis is consistent if sigma_j N_j >= 0 for every assumed sign.
 Exactly one consistent solution is used. None, or two that differ, is Painleve's paradox
 (friction makes the normal force ill-posed) and raises :class:`PainleveError`; nothing is chosen
-silently. The treatments of sgn are in :mod:`study.solver.friction.laws`.
+silently. The treatments of sgn are in :mod:`study.solver.friction.laws`. The solve itself (the hypotheses, the
+consistency rule, the choice; the pins' Newton iterate below) is ``study.laws.contact``, for both backends: this
+module computes qdd_a, lambda_a, U, L with its acceleration solver, calls it, and names what fails.
 
 Revolute joints with friction (:class:`study.model.FrictionalPin`, cut joints whose reaction R_p is the multipliers
 of their two rows) add a torque on the relative rotation omega_p = P_p qd (P_p = d omega_p / d qd), generalized
@@ -45,25 +47,19 @@ treatment's mode (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = tau [N m], ``
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
+from study.laws.contact import (CONSISTENT, CONVERGED, FORCE, NORMAL, OK, PIN_MAX_ITERATIONS, SCRATCH_ROWS,
+                                SIGMA, SINGULAR_HYPOTHESIS, STEP_FAILED, TOL, active_entries, assumed_signs,
+                                contact_forces, hypothesis, pin_newton_step)
+from study.laws.friction import friction_level, pin_norm
 from study.reference_data import tolerance
 from study.solver.dynamics import Dynamics
-from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb, friction_level, pin_norm
+from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb
 
 Array = np.ndarray
-
-# A sign hypothesis sigma_j for N_j is consistent if sigma_j N_j >= -CONSISTENCY_RTOL * (scale of the
-# terms summed into N_j). N_j comes from solves whose condition numbers stay below ~1e5 for the
-# study's mechanisms, so its round-off is below 1e5 * 2.2e-16 ~ 2e-11 relative; 1e-10 rejects a
-# hypothesis only when N_j has the wrong sign by more than round-off.
-CONSISTENCY_RTOL = 1e-10
-
-#: Iterations allowed to the Newton solve of the pins' friction torques before PinFrictionError.
-PIN_MAX_ITERATIONS = 50
 
 
 class PinFrictionError(RuntimeError):
@@ -159,6 +155,7 @@ class FrictionDynamics(Dynamics):
         fraction = getattr(self.law, "static_resistance_fraction", 1.0)
         self._static_resistance = np.concatenate([fraction * self._resistance, [p.torque for p in pins]])
         self._static_coef = np.concatenate([self._mu_s, [p.mu_static * p.radius for p in pins]])
+        self._phase_parameters = np.array(self.law.compiled_parameters(), dtype=float)
         #: entries with friction data that is not identically zero (a coefficient or a constant resistance > 0)
         self.carries_friction = np.concatenate([
             (self._mu_s > 0) | (self._mu_k > 0) | (self._resistance > 0),
@@ -201,17 +198,21 @@ class FrictionDynamics(Dynamics):
             return None
         return tuple(mode[:self.n_load_modes])
 
-    def phases(self, mode, v_t: Array) -> tuple[Array, Array]:
+    def phases(self, mode, v_t: Array | None) -> tuple[Array, Array]:
         """(stick flags, slip factors s) of the contacts, then the pins, in ``mode`` at their velocities ``v_t``
-        (tangential velocities, then relative rotation rates)."""
-        entries = None
+        (tangential velocities, then relative rotation rates; None for the exact treatment, which reads only the
+        mode): the treatment's ``compiled_phases`` (``study.laws.friction``), as on the compiled path."""
+        n = self.n_contacts
+        entries = np.zeros(0, dtype=np.int64)
         if self.law.switched:
-            n = self.n_contacts
             if mode is None or len(mode) != self.n_load_modes + 2 * n:
                 raise ValueError(f"the exact friction treatment needs a mode with {self.n_load_modes} load entries and "
                                  f"2 per contact and pin ({n}); got {mode!r}")
-            entries = np.asarray(mode[self.n_load_modes:], dtype=float).reshape(n, 2)
-        return self.law.phases(entries, v_t)
+            entries = np.asarray(mode, dtype=np.int64)
+        v = np.zeros(n) if v_t is None else np.ascontiguousarray(v_t, dtype=float).reshape(n)
+        stick, s = np.empty(n, dtype=bool), np.empty(n)
+        self.law.compiled_phases(entries, self.n_load_modes, v, self._phase_parameters, 0, stick, s)
+        return stick, s
 
     def _setup(self, t, q, qd, mode, stick, s):
         eom = self.eom
@@ -242,48 +243,44 @@ class FrictionDynamics(Dynamics):
         return self._solve_pins(t, q, qd, M, Q, J, c, A[:nc], b[:nc], v, stick, s, A[nc:], b[nc:])
 
     def _solve_pins(self, t, q, qd, M, Q, J, c, Jt, bt, v, stick, s, P, pb) -> ContactSolution:
-        """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s = 0 of the sliding pins around the contacts' solve,
-        the stuck pins' locks appended to the constraints."""
-        nc, pins, rows, r = self._nc, self._pins, self._pin_rows, J.shape[0]
+        """Newton on F(tau) = tau + (mu r |R(tau)|_delta + T0) s = 0 of the sliding pins around the contacts' solve
+        (each iterate: ``study.laws.contact.pin_newton_step``), the stuck pins' locks appended to the constraints."""
+        nc, pins, r = self._nc, self._pins, J.shape[0]
         held, slip = stick[nc:], s[nc:]
         free = ~held
         if held.any():
             J, c = np.vstack([J, P[held]]), np.concatenate([c, -pb[held]])
         Pf = P[free]
-        try:   # the unit-torque responses of the free pins' reactions: dR[j, i, :] = dR_i / dtau_j
-            dR = np.array([self.accelerations.solve(M, row, J, np.zeros(J.shape[0]))[1] for row in Pf])
+        try:   # the unit-torque responses of the free pins' multipliers: dlam[j] = d lambda / d tau_j
+            dlam = np.array([self.accelerations.solve(M, row, J, np.zeros(J.shape[0]))[1] for row in Pf])
         except np.linalg.LinAlgError:
             self._singular_hold(t, held)
-        dR = dR.reshape(len(Pf), J.shape[0])[:, rows][:, free]
-        coef, torque = self._pin_coef[free], self._pin_torque[free]
-        tau_f = np.zeros(len(Pf))
+        n = len(Pf)
+        dlam = np.ascontiguousarray(dlam, dtype=float).reshape(n, J.shape[0])
+        rows = np.ascontiguousarray(self._pin_rows[free], dtype=np.int64).reshape(2 * n)
+        slip_f, coef, torque = np.ascontiguousarray(slip[free]), self._pin_coef[free], self._pin_torque[free]
+        tau_f, norm, res, step, jac, piv = np.zeros(n), np.empty(n), np.empty(n), np.empty(n), np.empty((n, n)), \
+            np.empty(n, dtype=np.int64)
         history = []
         for _ in range(PIN_MAX_ITERATIONS):
             try:
                 sol = self._solve(t, M, Q + Pf.T @ tau_f, J, c, Jt, bt, v[:nc], stick[:nc], s[:nc])
             except np.linalg.LinAlgError:
                 self._singular_hold(t, held)
-            R = sol.lam[rows]                  # (np, 2)
-            norm = pin_norm.py_func(R[:, 0], R[:, 1], self._pin_delta)
-            level = friction_level.py_func(coef, norm[free], torque)
-            F = tau_f + level * slip[free]
-            history.append(float(np.max(np.abs(F), initial=0.0)))
-            if np.all(np.abs(F) <= self._pin_rtol * np.maximum(level, np.abs(tau_f))):
+            outcome = pin_newton_step(sol.lam, rows, dlam, tau_f, slip_f, coef, torque, self._pin_delta,
+                                      self._pin_rtol, norm, res, step, jac, piv)
+            history.append(float(np.max(np.abs(res), initial=0.0)))
+            if outcome == CONVERGED:
+                R = sol.lam[self._pin_rows]                  # (np, 2)
                 tau = np.zeros(len(pins))
                 tau[free], tau[held] = tau_f, -sol.lam[r:]
-                normal = np.concatenate([sol.normal, np.sqrt(np.sum(R ** 2, axis=1))])
+                normal = np.concatenate([sol.normal, pin_norm.py_func(R[:, 0], R[:, 1], 0.0)])   # |R|
                 margin = np.where(stick, self.static_limit(normal) - np.abs(np.concatenate([sol.friction, tau])),
                                   np.nan)
                 return ContactSolution(sol.qdd, sol.lam[:r], normal, np.concatenate([sol.friction, tau]), v,
                                        stick.copy(), margin)
-            jac = np.eye(len(Pf)) + (coef * slip[free] / norm[free])[:, None] * np.einsum("ik,jik->ij", R[free], dR)
-            try:
-                step = np.linalg.solve(jac, F)
-            except np.linalg.LinAlgError:
+            if outcome == STEP_FAILED:
                 break
-            if not np.all(np.isfinite(step)):
-                break
-            tau_f = tau_f - step
         names = tuple(p.name for p in pins)
         raise PinFrictionError(
             f"t = {t:.9g} s: the friction torques of revolute joint(s) {', '.join(map(repr, names))} did not converge "
@@ -299,68 +296,61 @@ class FrictionDynamics(Dynamics):
         f, qdd, lam, normal, tol and consistent (for checks and error messages)."""
         M, Q, J, c, A, b, _, stick, s = self._setup(t, q, qd, mode, stick, s)
         nc = self._nc
-        return list(self._hypotheses(M, Q, J, c, A[:nc], b[:nc], stick[:nc], s[:nc]))
+        return self._hypotheses(M, Q, J, c, np.ascontiguousarray(A[:nc]), b[:nc], stick[:nc], s[:nc])
 
-    def _hypotheses(self, M, Q, J, c, Jt, bt, stick, s):
-        """Yield dicts (sigma, f, qdd, lam, normal, tol, consistent) for each sign hypothesis."""
-        nc, r, m = self._nc, J.shape[0], M.shape[0]
-        k = self._index
-        qdd_a, lam_a = self.accelerations.solve(M, Q, J, c)
-        active = [j for j in range(nc) if stick[j] or s[j] != 0.0]
-        if not active:
-            yield {"sigma": {}, "f": np.zeros(nc), "qdd": qdd_a, "lam": lam_a, "normal": -lam_a[k],
-                   "tol": np.zeros(nc), "consistent": True}
-            return
-        na = len(active)
-        U, L = np.empty((m, na)), np.empty((r, na))
-        zero = np.zeros(r)
-        for col, j in enumerate(active):
+    def _responses(self, M, Q, J, c, Jt, stick, s):
+        """(qdd_a, lambda_a, active, n_act, U, L): the solution without tangential forces and the responses to a unit
+        tangential force at each active contact (the columns of U, L), from this dynamics' acceleration solver."""
+        qdd, lam = self.accelerations.solve(M, Q, J, c)
+        qdd, lam = np.array(qdd, dtype=float), np.array(lam, dtype=float)
+        active = np.zeros(self._nc, dtype=np.int64)
+        n_act = active_entries(stick, s, active)
+        U, L = np.empty((qdd.size, n_act)), np.empty((lam.size, n_act))
+        zero = np.zeros(lam.size)
+        for col, j in enumerate(active[:n_act]):
             U[:, col], L[:, col] = self.accelerations.solve(M, Jt[j], J, zero)
-        assumed = [j for j in active if not stick[j] and self._mu_k[j] > 0]
-        for signs in itertools.product((1.0, -1.0), repeat=len(assumed)):
-            sigma = dict(zip(assumed, signs))
-            A, b = np.zeros((na, na)), np.zeros(na)
-            for row, j in enumerate(active):
-                if stick[j]:
-                    A[row] = Jt[j] @ U
-                    b[row] = -(Jt[j] @ qdd_a + bt[j])
-                else:
-                    w = s[j] * self._mu_k[j] * sigma.get(j, 0.0)
-                    A[row] = -w * L[k[j]]
-                    A[row, row] += 1.0
-                    b[row] = -s[j] * self._resistance[j] + w * lam_a[k[j]]
-            try:
-                fa = np.linalg.solve(A, b)
-            except np.linalg.LinAlgError:
-                yield {"sigma": sigma, "f": None, "qdd": None, "lam": None, "normal": None, "tol": None,
-                       "consistent": False, "singular": True}
+        return qdd, lam, active, n_act, U, L
+
+    def _hypotheses(self, M, Q, J, c, Jt, bt, stick, s) -> list[dict]:
+        """A dict (sigma, f, qdd, lam, normal, tol, consistent, singular) for each sign hypothesis, each from
+        ``study.laws.contact.hypothesis`` (the one the solve uses)."""
+        nc = self._nc
+        qdd_a, lam_a, active, n_act, U, L = self._responses(M, Q, J, c, Jt, stick, s)
+        assumed = np.zeros(nc, dtype=np.int64)
+        n_ass = assumed_signs(active, n_act, stick, self._mu_k, assumed)
+        scratch, A, piv = np.zeros((SCRATCH_ROWS, nc)), np.zeros((nc, nc)), np.zeros(nc, dtype=np.int64)
+        hyps = []
+        for combo in range(1 << n_ass):
+            outcome = hypothesis(combo, assumed, n_ass, active, n_act, stick, s, Jt, bt, qdd_a, lam_a, U, L,
+                                 self._index, self._mu_k, self._resistance, A, piv, scratch)
+            rows = active[:n_act]
+            sigma = {int(rows[a]): float(scratch[SIGMA, a]) for a in assumed[:n_ass]}
+            if outcome == SINGULAR_HYPOTHESIS:
+                hyps.append({"sigma": sigma, "f": None, "qdd": None, "lam": None, "normal": None, "tol": None,
+                             "consistent": False, "singular": True})
                 continue
-            lam = lam_a + L @ fa
-            normal = -lam[k]
-            tol = CONSISTENCY_RTOL * (np.abs(lam_a[k]) + np.abs(L[k]) @ np.abs(fa))
-            consistent = all(sigma[j] * normal[j] >= -tol[j] for j in assumed)
-            f = np.zeros(nc)
-            f[active] = fa
-            yield {"sigma": sigma, "f": f, "qdd": qdd_a + U @ fa, "lam": lam, "normal": normal, "tol": tol,
-                   "consistent": consistent}
+            fa = scratch[FORCE, :n_act]
+            f, normal, tol = np.zeros(nc), -(lam_a + L @ fa)[self._index], np.zeros(nc)
+            f[rows], normal[rows], tol[rows] = fa, scratch[NORMAL, :n_act], scratch[TOL, :n_act]
+            hyps.append({"sigma": sigma, "f": f, "qdd": qdd_a + U @ fa, "lam": lam_a + L @ fa, "normal": normal,
+                         "tol": tol, "consistent": outcome == CONSISTENT})
+        return hyps
 
     def _solve(self, t, M, Q, J, c, Jt, bt, v_t, stick, s) -> ContactSolution:
-        hyps = list(self._hypotheses(M, Q, J, c, Jt, bt, stick, s))
-        good = [h for h in hyps if h["consistent"]]
-        chosen = good[0] if good else None
-        for other in good[1:]:
-            differ = [j for j in chosen["sigma"] if chosen["sigma"][j] != other["sigma"][j]]
-            # Both hypotheses agree when every contact whose assumed sign differs has N = 0 (grazing).
-            if not all(abs(h["normal"][j]) <= h["tol"][j] for j in differ for h in (chosen, other)):
-                chosen = None
-                break
-        if chosen is None:
-            self._painleve(t, hyps, len(good))
-        N = chosen["normal"]
-        f = chosen["f"]
-        margin = np.where(stick, friction_level.py_func(self._mu_s, N, self._static_resistance[:self._nc]) - np.abs(f),
+        """The contacts' solve (``study.laws.contact.contact_forces``); PainleveError unless exactly one sign
+        hypothesis is consistent."""
+        nc = self._nc
+        qdd, lam, active, n_act, U, L = self._responses(M, Q, J, c, Jt, stick, s)
+        f, N = np.zeros(nc), np.zeros(nc)
+        status = contact_forces(active, n_act, stick, s, Jt, bt, qdd, lam, U, L, self._index, self._mu_k,
+                                self._resistance, np.zeros((nc, nc)), np.zeros(nc, dtype=np.int64),
+                                np.zeros((SCRATCH_ROWS, nc)), f, N)
+        if status != OK:
+            hyps = self._hypotheses(M, Q, J, c, Jt, bt, stick, s)
+            self._painleve(t, hyps, sum(h["consistent"] for h in hyps))
+        margin = np.where(stick, friction_level.py_func(self._mu_s, N, self._static_resistance[:nc]) - np.abs(f),
                           np.nan)
-        return ContactSolution(chosen["qdd"], chosen["lam"], N, f, v_t, stick.copy(), margin)
+        return ContactSolution(qdd, lam, N, f, v_t, stick.copy(), margin)
 
     def _singular_hold(self, t, held):
         names = tuple(p.name for p, h in zip(self._pins, held) if h)

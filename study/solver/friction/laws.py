@@ -9,11 +9,11 @@ Treatments, by name (``FRICTION_TREATMENTS``):
   arctan, sqrt) of width eps; no stick, the contact creeps under sub-limit loads.
 - ``sign``: 000's plain sgn(v_t) at every evaluation (meant for fixed-step RK4; it chatters at v_t = 0).
 
-Each treatment is one class for both backends: ``phases`` gives the contacts' stick flags and slip
-factors s (f = -s (R + mu_k |N|) in slip) on the reference path, and ``compiled_phases`` is the same law
-for the compiled path, a numba function of signature ``study.kernels.signatures.PHASES`` that reads the
-numbers ``compiled_parameters()`` at its offset in the compiled options (``study.fast.frontend.pack_options``).
-The slip factors of 'regularized' and 'sign' are ``study.kernels.signs`` functions, the same on both paths.
+Each treatment is one class for both backends. Its phases law (the contacts' stick flags and slip factors s,
+f = -s (R + mu_k |N|) in slip) is ``compiled_phases``, a compiled function of ``study.laws.friction`` (its one home)
+that both paths call: it reads the numbers ``compiled_parameters()`` at its offset in the options
+(``study.fast.frontend.pack_options``; ``FrictionDynamics.phases`` on the reference path). The slip factors of
+'regularized' and 'sign' are ``study.kernels.signs`` functions.
 
 Paper 000 says only that R (its F) "opposes the slider's motion"; whether it also resists the onset of
 motion, i.e. counts as static holding capacity, is an open assumption. ``RESISTANCE_READINGS`` names
@@ -33,9 +33,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from study.kernels.cache import kernel
-from study.kernels.signatures import PHASES
-from study.kernels.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
+from study.kernels.signs import SIGN_FUNCTIONS, SIGN_IDS
+from study.laws.friction import mode_phases, slip_phases
 
 Array = np.ndarray
 
@@ -49,38 +48,6 @@ RESISTANCE_READINGS = {"holds": 1.0, "sliding_only": 0.0}
 DEFAULT_EPS = 1e-3
 
 
-@kernel()
-def friction_level(coefficient, normal, constant):
-    """The size of a Coulomb force or torque, constant + coefficient |normal|: a contact's R + mu |N| [N], a pin's
-    T0 + mu r |R|_delta [N m]; with the static coefficient, the limit a stuck entry holds. Scalars (compiled) or
-    arrays (``.py_func``, reference path)."""
-    return constant + coefficient * np.abs(normal)
-
-
-@kernel()
-def pin_norm(rx, ry, delta):
-    """|R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) of a pin's reaction (delta: ``pin_friction_norm_width``), the smooth
-    norm that replaces |R|'s kink at R = 0 in the pin's friction torque. Scalars or arrays (``.py_func``)."""
-    return np.sqrt(rx * rx + ry * ry + delta * delta)
-
-
-@kernel(PHASES)
-def _mode_phases(mode, nlm, vt, cf, off, stick, s):
-    """ExactCoulomb.phases: mode = the loads' nlm entries, then per contact (+1 stick / -1 slip, direction)."""
-    for j in range(vt.size):
-        stick[j] = mode[nlm + 2 * j] > 0
-        s[j] = 0.0 if stick[j] else float(mode[nlm + 2 * j + 1])
-
-
-@kernel(PHASES)
-def _slip_phases(mode, nlm, vt, cf, off, stick, s):
-    """SlipFactor.phases, with cf[off:] = SIGN_IDS[sgn], eps (SlipFactor.compiled_parameters)."""
-    kind, eps = int(cf[off]), cf[off + 1]
-    for j in range(vt.size):
-        stick[j] = False
-        s[j] = sign_function(kind, vt[j], eps)
-
-
 class SlipFactor:
     """A treatment without a true stick: the slip factor is ``SIGN_FUNCTIONS[sgn](v_t, eps)`` at every
     evaluation, and ``stick_<contact>`` is reported as 1 inside the band |v_t| <= eps (apparent stick)."""
@@ -88,15 +55,7 @@ class SlipFactor:
     sgn: str
     eps: float
 
-    def factor(self, v: Array) -> Array:
-        return apply(self.sgn, v, self.eps)
-
-    def phases(self, entries: Array | None, v: Array) -> tuple[Array, Array]:
-        """No contact sticks; the slip factors at the tangential velocities v (no mode entries: ``entries`` None)."""
-        v = np.asarray(v, dtype=float)
-        return np.zeros(v.size, dtype=bool), self.factor(v).reshape(v.size)
-
-    compiled_phases = staticmethod(_slip_phases)
+    compiled_phases = staticmethod(slip_phases)
 
     def compiled_parameters(self) -> list[float]:
         return [float(SIGN_IDS[self.sgn]), self.eps]
@@ -126,13 +85,7 @@ class ExactCoulomb:
     def static_resistance_fraction(self) -> float:
         return RESISTANCE_READINGS[self.resistance_reading]
 
-    def phases(self, entries: Array, v: Array) -> tuple[Array, Array]:
-        """Stick where the mode says so (``entries``: (nc, 2) mode entries, +1 stick / -1 slip and the frozen
-        direction), else slip in the frozen direction."""
-        stick = entries[:, 0] > 0
-        return stick, np.where(stick, 0.0, entries[:, 1])
-
-    compiled_phases = staticmethod(_mode_phases)
+    compiled_phases = staticmethod(mode_phases)
 
     def compiled_parameters(self) -> list[float]:
         return []

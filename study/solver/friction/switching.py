@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from study.errors import SimulationError
-from study.solver.friction.contact import CONSISTENCY_RTOL, FrictionDynamics, PainleveError
+from study.laws.contact import CONSISTENCY_RTOL
+from study.solver.friction.contact import FrictionDynamics, PainleveError
 
 Array = np.ndarray
 

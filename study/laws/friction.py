@@ -1,0 +1,54 @@
+"""Friction levels and phases: the size of a Coulomb force or torque, a pin's smooth reaction norm, and the stick
+flags and slip factors of each friction treatment (paper 000 eqs. 3, 32; SPEC sec. 1).
+
+Every function is compiled (``study.kernels.cache.kernel``). The compiled loop calls them natively; the reference
+path calls the same compiled functions (``study.solver.friction``), and the Exudyn user functions run
+:func:`friction_level` and :func:`pin_norm` as their Python source (``py_func``), on scalars or arrays.
+
+The phases functions have the signature ``study.kernels.signatures.PHASES``: (mode, n_load_modes, v_t, cf, offset,
+stick, s) fills the stick flags and slip factors s (f = -s (R + mu_k |N|) in slip) of the contacts, then the pins,
+reading the treatment's numbers at ``cf[offset:]``. The treatments that name them are the classes of
+``study.solver.friction.laws``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from study.kernels.cache import kernel
+from study.kernels.signatures import PHASES
+from study.kernels.signs import sign_function
+
+
+@kernel()
+def friction_level(coefficient, normal, constant):
+    """The size of a Coulomb force or torque, constant + coefficient |normal|: a contact's R + mu |N| [N], a pin's
+    T0 + mu r |R|_delta [N m]; with the static coefficient, the limit a stuck entry holds. Scalars (compiled) or
+    arrays (``.py_func``)."""
+    return constant + coefficient * np.abs(normal)
+
+
+@kernel()
+def pin_norm(rx, ry, delta):
+    """|R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) of a pin's reaction (delta: ``pin_friction_norm_width``), the smooth
+    norm that replaces |R|'s kink at R = 0 in the pin's friction torque. Scalars or arrays (``.py_func``)."""
+    return np.sqrt(rx * rx + ry * ry + delta * delta)
+
+
+@kernel(PHASES)
+def mode_phases(mode, nlm, vt, cf, off, stick, s):
+    """The exact treatment: the mode holds the loads' nlm entries, then per entry (+1 stick / -1 slip, the frozen
+    sliding direction); a stuck entry has s = 0, a sliding one its direction. No parameters (``vt``: only its size)."""
+    for j in range(vt.size):
+        stick[j] = mode[nlm + 2 * j] > 0
+        s[j] = 0.0 if stick[j] else float(mode[nlm + 2 * j + 1])
+
+
+@kernel(PHASES)
+def slip_phases(mode, nlm, vt, cf, off, stick, s):
+    """A treatment without a true stick ('regularized', 'sign'): nothing sticks, s = sgn_approx(v_t, eps) with
+    cf[off:] = (``study.kernels.signs.SIGN_IDS`` of the approximation, eps). ``mode`` is not read."""
+    kind, eps = int(cf[off]), cf[off + 1]
+    for j in range(vt.size):
+        stick[j] = False
+        s[j] = sign_function(kind, vt[j], eps)
