@@ -6,5 +6,9 @@ reference path) nor ``study.fast`` (the compiled path) defines a law of its own;
 
 The homes, one module per law:
 
-(filled in as each law moves here)
+stabilization
+    The stabilization biases b(Phi, Phidot) of none, Baumgarte and the sliding mode, with their parameter layouts.
+projection
+    The post-step projection: the minimum-norm or mass-weighted correction (truncated least squares) and the
+    position and velocity iterations with their tolerance and iteration bound.
 """
