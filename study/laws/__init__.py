@@ -6,9 +6,16 @@ reference path) nor ``study.fast`` (the compiled path) defines a law of its own;
 
 The homes, one module per law:
 
-- ``study.laws.friction``: the friction level (R + mu |N|, T0 + mu r |R|_delta, and the static limits), a pin's
-  smooth reaction norm |R|_delta, and the friction treatments' phases (stick flags and slip factors);
-- ``study.laws.contact``: the contact and pin solve: the normal-force sign hypotheses of the sliding contacts and
-  their consistency rule (``CONSISTENCY_RTOL``), the choice of exactly one (else Painleve), and the Newton iterate of
-  the pins' friction torques (``PIN_MAX_ITERATIONS``).
+friction
+    The friction level (R + mu |N|, T0 + mu r |R|_delta, and the static limits), a pin's smooth reaction norm
+    |R|_delta, and the friction treatments' phases (stick flags and slip factors).
+contact
+    The contact and pin solve: the normal-force sign hypotheses of the sliding contacts and their consistency rule
+    (``CONSISTENCY_RTOL``), the choice of exactly one (else Painleve), and the Newton step of the pins' friction
+    torques (``PIN_MAX_ITERATIONS``).
+stabilization
+    The stabilization biases b(Phi, Phidot) of none, Baumgarte and the sliding mode, with their parameter layouts.
+projection
+    The post-step projection: the minimum-norm or mass-weighted correction (truncated least squares) and the
+    position and velocity iterations with their tolerance and iteration bound.
 """

@@ -12,12 +12,13 @@ constraint dynamics (Phi_ddot = Phi_q qdd - gamma):
 The sgn function of the sliding mode is one of ``SIGN_FUNCTIONS`` (001 after eq. 17; ``study.kernels.signs``, one
 numba function each for both backends).
 
-Each method is one class for both backends: ``bias`` is its reference (NumPy) form, and
-``compiled_bias`` its compiled counterpart, a numba function of signature
-``study.kernels.signatures.BIAS`` that the compiled loop calls with the parameters
-``compiled_parameters(r)`` packed into its options (``study.fast.frontend.pack_options``). A new
-method (or a subclass that changes ``bias``) runs compiled once its class defines both; a class that
-does not define its own ``compiled_bias`` is refused by name on the compiled path.
+Each method is one class for both backends around its law in ``study.laws``: ``compiled_bias`` is its bias law
+(``study.laws.stabilization``, a numba function of signature ``study.kernels.signatures.BIAS``), which the compiled
+loop calls with the parameters ``compiled_parameters(r)`` packed into its options
+(``study.fast.frontend.pack_options``), and ``bias`` is the same law called from Python (the reference path). The
+projection's correction is ``study.laws.projection``, run by :meth:`Projection.project` through its source. A new
+method (or a subclass that changes ``bias``) runs compiled once its class defines both ``bias`` and
+``compiled_bias``; a class that does not define its own ``compiled_bias`` is refused by name on the compiled path.
 """
 
 from __future__ import annotations
@@ -28,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from study import arguments
-from study.kernels.cache import kernel
-from study.kernels.signatures import BIAS
-from study.kernels.signs import SIGN_FUNCTIONS, SIGN_IDS, apply, sign_function
+from study.kernels.signs import SIGN_FUNCTIONS
+from study.laws import projection
+from study.laws.stabilization import (apply_bias, baumgarte_bias, baumgarte_parameters, sliding_mode_bias,
+                                      sliding_mode_parameters, zero_bias)
 from study.reference_data import tolerance
 
 from study.model.eom import EquationsOfMotion
@@ -58,7 +60,7 @@ class Stabilization:
     compiled_bias = None   # the compiled form of bias (signature study.kernels.signatures.BIAS), per class
 
     def bias(self, phi: Array, phidot: Array) -> Array:
-        return np.zeros_like(phi)
+        return apply_bias(zero_bias, [], phi, phidot)
 
     def compiled_parameters(self, r: int) -> list[float]:
         """The numbers ``compiled_bias`` reads at cf[offset:], for r constraints."""
@@ -71,32 +73,10 @@ class Stabilization:
         return {"stabilization": self.name}
 
 
-@kernel(BIAS)
-def _zero_bias(phi, phidot, cf, off, out):
-    for i in range(phi.size):
-        out[i] = 0.0
-
-
-@kernel(BIAS)
-def _baumgarte_bias(phi, phidot, cf, off, out):
-    for i in range(phi.size):   # cf[off] = 2 d w, cf[off + 1] = w^2
-        out[i] = -cf[off] * phidot[i] - cf[off + 1] * phi[i]
-
-
-@kernel(BIAS)
-def _sliding_mode_bias(phi, phidot, cf, off, out):
-    r = phi.size   # cf[off:] = SIGN_IDS[sgn], width, Lambda (r), K (r), k (r)
-    kind, width = int(cf[off]), cf[off + 1]
-    for i in range(r):
-        lam, K, k = cf[off + 2 + i], cf[off + 2 + r + i], cf[off + 2 + 2 * r + i]
-        s = phidot[i] + lam * phi[i]
-        out[i] = -lam * phidot[i] - K * s - k * sign_function(kind, s, width)
-
-
 @dataclass(frozen=True)
 class NoStabilization(Stabilization):
     name: str = "none"
-    compiled_bias = staticmethod(_zero_bias)
+    compiled_bias = staticmethod(zero_bias)
 
 
 @dataclass(frozen=True)
@@ -124,12 +104,12 @@ class Baumgarte(Stabilization):
         return cls(d=alpha / beta, omega=beta)
 
     def bias(self, phi, phidot):
-        return -2.0 * self.d * self.omega * phidot - self.omega**2 * phi
+        return apply_bias(baumgarte_bias, baumgarte_parameters(self.d, self.omega), phi, phidot)
 
-    compiled_bias = staticmethod(_baumgarte_bias)
+    compiled_bias = staticmethod(baumgarte_bias)
 
     def compiled_parameters(self, r):
-        return [2.0 * self.d * self.omega, self.omega ** 2]
+        return baumgarte_parameters(self.d, self.omega)
 
     def settings(self):
         return {"stabilization": self.name, "d": self.d, "omega": self.omega}
@@ -159,19 +139,13 @@ class SlidingMode(Stabilization):
             raise ValueError(f"sliding_mode: unknown sgn approximation {self.sgn!r}; "
                              f"valid choices: {', '.join(SIGN_FUNCTIONS)}")
 
-    def surface(self, phi, phidot):
-        return phidot + np.asarray(self.Lambda) * phi
-
     def bias(self, phi, phidot):
-        lam, K, k = (np.asarray(v, dtype=float) for v in (self.Lambda, self.K, self.k))
-        s = phidot + lam * phi
-        return -lam * phidot - K * s - k * apply(self.sgn, s, self.width)
+        return apply_bias(sliding_mode_bias, self.compiled_parameters(np.size(phi)), phi, phidot)
 
-    compiled_bias = staticmethod(_sliding_mode_bias)
+    compiled_bias = staticmethod(sliding_mode_bias)
 
     def compiled_parameters(self, r):
-        per_row = [np.broadcast_to(np.asarray(v, dtype=float), (r,)).tolist() for v in (self.Lambda, self.K, self.k)]
-        return [float(SIGN_IDS[self.sgn]), self.width] + [x for row in per_row for x in row]
+        return sliding_mode_parameters(self.Lambda, self.K, self.k, self.sgn, self.width, r)
 
     def settings(self):
         return {"stabilization": self.name, "Lambda": self.Lambda, "K": self.K, "k": self.k,
@@ -193,41 +167,35 @@ class Projection(Stabilization):
     max_iter: int = 10
     name: str = "projection"
     projects: bool = True
-    compiled_bias = staticmethod(_zero_bias)   # b = 0; the projection after each step is study.fast.project
+    compiled_bias = staticmethod(zero_bias)   # b = 0; the projection after each step is study.laws.projection
 
     def __post_init__(self) -> None:
         if self.weighting not in ("minimum_norm", "mass"):
             raise ValueError(f"projection: weighting {self.weighting!r}; valid choices: minimum_norm, mass")
         _positive("projection", tol=self.tol, max_iter=self.max_iter)
 
-    def _correction(self, eom, q, J, residual):
-        """The minimum-W-norm dq with J dq = -residual, by least squares truncated at ``singular_ratio``
-        (rank-revealing: at a singular pose the lost rows' directions are left alone, elsewhere it is
-        -W^-1 J^T (J W^-1 J^T)^-1 residual)."""
-        rcond = tolerance("singular_ratio")
-        if self.weighting == "mass":
-            L = np.linalg.cholesky(eom.mass(q))                 # M = L L^T, dq = L^-T dz
-            JL = np.linalg.solve(L, J.T).T                      # J L^-T
-            dz = np.linalg.lstsq(JL, residual, rcond=rcond)[0]
-            return -np.linalg.solve(L.T, dz)
-        return -np.linalg.lstsq(J, residual, rcond=rcond)[0]
+    def compiled_parameters(self, r):
+        """The number the projection reads at the bias parameters (``study.fast.project``): its ``rcond``."""
+        return [tolerance("singular_ratio")]
 
     def project(self, eom, q, qd):
-        q = q.copy()
-        phi = eom.phi(q)
-        if np.max(np.abs(phi), initial=0.0) <= self.tol and np.max(np.abs(eom.phi_q(q) @ qd), initial=0.0) <= self.tol:
-            return q, qd, False
-        for _ in range(self.max_iter):
-            if np.max(np.abs(phi)) <= self.tol:
-                break
-            q += self._correction(eom, q, eom.phi_q(q), phi)
-            phi = eom.phi(q)
-        else:
-            raise RuntimeError(f"projection did not reach max|Phi| <= {self.tol:g} in {self.max_iter} "
-                               f"iterations (max|Phi| = {np.max(np.abs(phi)):.3g}); the step left the manifold too far")
-        J = eom.phi_q(q)
-        qd = qd + self._correction(eom, q, J, J @ qd)
-        return q, qd, True
+        """The law ``study.laws.projection.project`` (through its source) on copies of q and qd, with the equations'
+        Phi, Phi_q and M; RuntimeError if max|Phi| stays above ``tol`` for ``max_iter`` corrections."""
+        mass = self.weighting == "mass"
+
+        def kinematics(q, p, phi, J, M):
+            phi[:] = eom.phi(q)
+            J[:] = eom.phi_q(q)
+            if mass:
+                M[:] = eom.mass(q)
+
+        q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
+        changed, status = projection.project.py_func(kinematics, q, qd, np.zeros(0), eom.n_constraints, self.tol,
+                                                     mass, self.max_iter, tolerance("singular_ratio"))
+        if status == projection.NOT_CONVERGED:
+            raise RuntimeError(f"projection did not reach max|Phi| <= {self.tol:g} in {self.max_iter} iterations "
+                               f"(max|Phi| = {np.max(np.abs(eom.phi(q))):.3g}); the step left the manifold too far")
+        return q, qd, changed
 
     def settings(self):
         return {"stabilization": self.name, "weighting": self.weighting, "tol": self.tol}
