@@ -27,11 +27,9 @@ STUDY = Path(__file__).resolve().parents[1] / "study"
 KNOWN = {
     "cli.py::build_parser": 113,
     "fast/dynamics.py::_friction": 103,
-    "fast/loop.py::integrate_segment": 156,
     "model/compile.py::compile_description": 84,
     "params.py::parse_parameters": 104,
     "simulate.py::simulate": 210,
-    "solver/integrate.py::integrate": 163,
 }
 
 

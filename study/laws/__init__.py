@@ -6,5 +6,7 @@ reference path) nor ``study.fast`` (the compiled path) defines a law of its own;
 
 The homes, one module per law:
 
+- ``events``: event location, the first crossing of a switching function within a step (a scan, then Brent's method)
+- ``modes``: the mode switch, the mode at t0 and after a located crossing (at most ``MAX_EVENTS`` per run)
 (filled in as each law moves here)
 """
