@@ -242,8 +242,8 @@ def test_non_finite_values_stop_the_run_on_both_paths():
 def test_switches_at_loose_tolerances_as_on_the_reference_path(integrator, rtol):
     """At loose tolerances a step can start on the far side of a switching surface (it is zero there up to
     round-off right after a located switch). The compiled loop must apply the reference loop's rule
-    (_first_crossing) there: a root outside the step (t = 0) would restart the run at that root until the step
-    collapses. Both paths must locate the same switches, and their runs, each within
+    (study.laws.events.crossing_finder) there: a root outside the step (t = 0) would restart the run at that root
+    until the step collapses. Both paths must locate the same switches, and their runs, each within
     adaptive_global_error_factor * rtol * max|q| of the exact solution, within twice that of each other."""
     runs = {b: simulate("quick_return", variant="seed", t_end=2.0, integrator=integrator, rtol=rtol, backend=b)
             for b in ("reference", "compiled")}

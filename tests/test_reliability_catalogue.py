@@ -324,7 +324,7 @@ def rk4_step_far_too_large(tmp):
 
 
 # A step that starts on the far side of a switching surface flips the mode there
-# (study.solver.integrate._first_crossing) rather than stopping with "cannot be located": with h = 0.5 s
+# (study.laws.events.crossing_finder) rather than stopping with "cannot be located": with h = 0.5 s
 # the run goes on and diverges, which the non-finite guard names with the step.
 @entry("non-finite", "step h = 0.5 s is likely too large", error=NonFiniteError)
 def rk4_step_over_a_switch(tmp):

@@ -25,8 +25,6 @@ STUDY = Path(__file__).resolve().parents[1] / "study"
 
 #: "<path under study/>" (a module, its lines) or "<path under study/>::<qualified name>" (a function, its lines)
 KNOWN = {
-    "fast/loop.py::integrate_segment": 156,
-    "solver/integrate.py::integrate": 163,
 }
 
 

@@ -32,7 +32,7 @@ from study.params import load_parameters
 from study.reactions import absolute_state
 from study.reference_data import tolerance
 from study.model.initial_state import NEWTON_TOL
-from study.solver.integrate import BRENT_XTOL
+from study.laws.events import BRENT_XTOL
 
 RTOL = 1e-8
 T_END = 1.0

@@ -6,9 +6,9 @@ numba compiles (:mod:`study.fast.user`, which names what it cannot compile), the
 every stabilization (none, baumgarte, sliding_mode with every sgn approximation, projection),
 friction None / 'regularized' / 'sign' / 'exact' in sliding contacts and revolute joints, and the integrators RK23,
 RK45, DOP853 (scipy's error control) and RK4. Anything else raises a ValueError naming the option: there is no silent
-fallback. Switches are located in the compiled loop; the new mode is set here (loads: the crossing
-entry flips; exact friction: ``study.solver.friction.StickSlipSwitching.on_event``, the reference
-rule), then the next segment starts. Samples are post-processed by the reference
+fallback. Switches are located in the compiled loop; the new mode is set here by the reference loop's rule
+(``study.laws.modes.switch``: loads: the crossing entry flips; exact friction:
+``study.solver.friction.StickSlipSwitching.on_event``), then the next segment starts. Samples are post-processed by the reference
 ``study.solver.assemble.assemble_result``, so a result has exactly the reference's fields.
 """
 
@@ -33,6 +33,7 @@ from study.fast.dynamics import (ACCELERATIONS_ENTRY, PIN_NOT_CONVERGED, RHS_ENT
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
                              FAIL_STEP, SEGMENT, integrate_segment)
 from study.kernels.signatures import BIAS, EVALUATE, PHASES
+from study.laws.modes import as_mode, initial_mode, switch
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
 from study.model import Mechanism
@@ -43,7 +44,6 @@ from study.results import SimulationResult
 from study.solver.assemble import assemble_result
 from study.solver.dynamics import Dynamics
 from study.solver.friction import FrictionDynamics, StickSlipSwitching
-from study.solver.integrate import MAX_EVENTS, initial_mode
 from study.solver.run import build_dynamics, output_times, run_bounds, run_metadata
 from study.solver.stabilization import Stabilization
 
@@ -298,7 +298,7 @@ def _raise_failure(outcome: int, integrator: str, t_reached: float, i_event: int
     if outcome == FAIL_LOCATE:
         raise RunBoundError(f"{integrator} (compiled) stopped at t = {t_reached:.9g} s: the switch of switching "
                             f"function {i_event} cannot be located within the step from there (its interpolant "
-                            f"returns to the side it started on and stays there): the step is too large for the "
+                            f"returns to the side it started on and stays there, or shows no sign change): the step is too large for the "
                             f"solution (use a smaller rtol)", t=float(t_reached), quantity="step")
     if outcome == FAIL_NONFINITE:
         raise NonFiniteError(f"{integrator} (compiled) failed at t = {t_reached:.9g} s: a non-finite value in the "
@@ -327,7 +327,7 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     tab = tableau(integrator)
     arrays, (n_stages, order, n_rows) = tab[:7], tab[7:]
     if s.switching is not None:
-        mode = tuple(s.switching.initial_mode(0.0, s.y0.copy()))
+        mode = as_mode(s.switching.initial_mode(0.0, s.y0.copy()))
     elif s.n_load_modes:
         def indicators(t, y):
             return eom.indicators(t, y[:m], y[m:2 * m])
@@ -355,16 +355,7 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
         if outcome == DONE:
             break
         t, y = float(t_reached), y_end.copy()
-        if s.switching is not None:
-            mode = tuple(s.switching.on_event(t, y, mode, int(i_event)))
-        else:
-            flipped = list(mode)
-            flipped[i_event] = -flipped[i_event]
-            mode = tuple(flipped)
-        events.append({"t": t, "indicator": int(i_event), "new_sign": mode[i_event]})
-        if len(events) > MAX_EVENTS:
-            raise RuntimeError(f"more than {MAX_EVENTS} switches by t = {t:.9g}: the solution chatters on "
-                               f"switching function {i_event}")
+        mode = switch(s.switching, t, y, mode, int(i_event), events)
     k = int(counters[0])
     modes = [tuple(int(v) for v in row[:n_mode]) if n_mode else None for row in mode_out[:k]]
     stats = {"steps": int(counters[1]), "nfev": int(counters[2]), "projections": int(counters[3]),

@@ -4,9 +4,10 @@
 restart of ``study.solver.integrate.integrate``:
 
 1. after each accepted step the switching functions are checked; a sign change is located on the
-   step's interpolant with Brent's method (scipy's ``brentq`` algorithm, same tolerances), the
-   samples before it are written, and the segment returns the event to the caller, which sets
-   the new mode and starts the next segment (so the integrator restarts at the switch);
+   step's interpolant by the reference loop's law (``study.laws.events.crossing_finder``: a scan, then
+   Brent's method), the samples before it are written, and the segment returns the event to the
+   caller, which sets the new mode (``study.laws.modes.switch``) and starts the next segment (so the
+   integrator restarts at the switch);
 2. the post-step projection is applied (stabilization ``projection``);
 3. the requested output times inside the step are sampled from the interpolant.
 
@@ -27,12 +28,11 @@ from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEM
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
 from study.laws.friction import friction_level  # a stuck entry's limit, as the reference
-from study.solver.integrate import BRENT_RTOL, BRENT_XTOL, SCAN_POINTS  # as the reference loop
+from study.laws.events import crossing_finder
 
 # segment outcomes (>= 0) and failures (< 0)
 DONE, EVENT = 0, 1
 FAIL_STEP, FAIL_RHS, FAIL_PROJECTION, FAIL_EVALUATIONS, FAIL_STALL, FAIL_NONFINITE, FAIL_LOCATE = -1, -2, -3, -4, -5, -6, -7
-BRENT_MAXITER = 100
 SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
 
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
@@ -73,90 +73,14 @@ def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, 
 
 
 @internal()
-def _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws, ytmp, g):
+def _g(s, i, evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, mode, p, lp, ci, cf, ws, ytmp, g):
+    """Switching function i at time s on the step's interpolant: the function of t that ``first_crossing`` locates."""
     dense_eval(method, D, n_rows, y_old, (s - t_old) / h, ytmp)
     event_values(evaluate, bias, phases, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
     return g[i]
 
 
-@internal()
-def locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xa, xb, i, mode, p, lp, ci, cf, ws,
-           ytmp, g):
-    """Zero of switching function i on [xa, xb] along the interpolant (scipy's brentq algorithm)."""
-    xpre, xcur = xa, xb
-    xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
-    fpre = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xpre, i, mode, p, lp, ci, cf, ws,
-              ytmp, g)
-    fcur = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf, ws,
-              ytmp, g)
-    if fpre == 0.0:
-        return xpre
-    if fcur == 0.0:
-        return xcur
-    for _ in range(BRENT_MAXITER):
-        if fpre != 0.0 and fcur != 0.0 and (np.signbit(fpre) != np.signbit(fcur)):
-            xblk, fblk = xpre, fpre
-            spre = scur = xcur - xpre
-        if abs(fblk) < abs(fcur):
-            xpre, xcur, xblk = xcur, xblk, xcur
-            fpre, fcur, fblk = fcur, fblk, fcur
-        delta = (BRENT_XTOL + BRENT_RTOL * abs(xcur)) / 2
-        sbis = (xblk - xcur) / 2
-        if fcur == 0.0 or abs(sbis) < delta:
-            return xcur
-        if abs(spre) > delta and abs(fcur) < abs(fpre):
-            if xpre == xblk:
-                stry = -fcur * (xcur - xpre) / (fcur - fpre)
-            else:
-                dpre = (fpre - fcur) / (xpre - xcur)
-                dblk = (fblk - fcur) / (xblk - xcur)
-                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
-            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
-                spre, scur = scur, stry
-            else:
-                spre, scur = sbis, sbis
-        else:
-            spre, scur = sbis, sbis
-        xpre, fpre = xcur, fcur
-        if abs(scur) > delta:
-            xcur += scur
-        else:
-            xcur += delta if sbis > 0 else -delta
-        fcur = _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, xcur, i, mode, p, lp, ci, cf,
-                  ws, ytmp, g)
-    return xcur
-
-
-@internal()
-def first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_new, i, mode, p, lp, ci,
-                   cf, ws, ytmp, g):
-    """The first time in [t_old, t_new] at which switching function i leaves the side mode[i], or NaN if the
-    interpolant comes back to that side and stays there; the rule of the reference loop's ``_first_crossing``
-    (study/solver/integrate.py), whose docstring gives the reasons. Normally the step starts on the side
-    mode[i] and Brent's method brackets the step; right after a located switch the step can start on the far
-    side (g is zero up to round-off there), and then SCAN_POINTS samples decide."""
-    sign = mode[i]
-    if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_old, i, mode, p, lp, ci, cf, ws,
-          ytmp, g) * sign >= 0:
-        return locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, t_old, t_new, i, mode, p,
-                      lp, ci, cf, ws, ytmp, g)
-    back = -1
-    for k in range(1, SCAN_POINTS + 1):
-        s = t_old + (t_new - t_old) * k / SCAN_POINTS
-        if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws,
-              ytmp, g) * sign >= 0:
-            back = k
-            break
-    if back < 0:
-        return t_old
-    for k in range(back + 1, SCAN_POINTS + 1):
-        s = t_old + (t_new - t_old) * k / SCAN_POINTS
-        if _g(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s, i, mode, p, lp, ci, cf, ws,
-              ytmp, g) * sign < 0:
-            s_prev = t_old + (t_new - t_old) * (k - 1) / SCAN_POINTS
-            return locate(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, s_prev, s, i, mode, p,
-                          lp, ci, cf, ws, ytmp, g)
-    return np.nan
+first_crossing = internal()(crossing_finder(_g))   # the law of study.laws.events for _g
 
 
 @internal()
@@ -193,6 +117,173 @@ def _due(t_out, k, t_hi):
     return k < t_out.size and (t_out[k] < t_hi or abs(t_out[k] - t_hi) <= SAMPLE_ATOL * max(1.0, abs(t_hi)))
 
 
+@internal()
+def _failed(outcome, t, ws, y_end, counters):
+    """The segment's result for a failure ``outcome`` at t (FAIL_RHS: at the failing evaluation, see _rhs_failed)."""
+    if outcome == FAIL_RHS:
+        return _rhs_failed(ws, y_end, counters)
+    return outcome, t, -1
+
+
+@internal()
+def _start(evaluate, bias, phases, kinematics, method, order, t, y, t_end, first_step, rtol, atol, f, mode, p, lp, ci,
+           cf, ws, tmp, f_new, t_out, y_out, mode_out, counters):
+    """f at the start, the samples due there (the run's first segment only) and the first step size:
+    -> (0 or FAIL_RHS, FAIL_PROJECTION; h_abs)."""
+    m, r = ws.q.size, dimensions(ci)[1]
+    if rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, f) != 0:
+        return FAIL_RHS, 0.0
+    if counters[4] == 1:
+        counters[4] = 0
+        while _due(t_out, counters[0], t):
+            if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+                return FAIL_PROJECTION, 0.0
+    if method == RK4_ID or first_step > 0:
+        return 0, first_step
+    h_abs, status = select_initial_step(evaluate, bias, phases, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci, cf,
+                                        ws, tmp, f_new)
+    return (FAIL_RHS if status != 0 else 0), h_abs
+
+
+@internal()
+def _rk4_step(evaluate, bias, phases, tab, t, y, h_abs, t_end, K, f, y_new, f_new, mode, p, lp, ci, cf, ws, tmp):
+    """One RK4 step, h = min(h_abs, t_end - t), into y_new, f_new: -> (0 or FAIL_RHS, t_new, h)."""
+    h = min(h_abs, t_end - t)
+    for i in range(y.size):
+        K[0, i] = f[i]
+    if stages(evaluate, bias, phases, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
+        return FAIL_RHS, t, h
+    combine(tab, 4, y, h, K, y_new)
+    t_new = t + h
+    if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+        return FAIL_RHS, t_new, h
+    return 0, t_new, h
+
+
+@internal()
+def _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y, h_abs, t_end, rtol, atol, K, f, y_new,
+                   f_new, mode, p, lp, ci, cf, ws, tmp, counters, bounds):
+    """One accepted step under scipy's error control into y_new, f_new: -> (0, t_new, h, the next h_abs), or
+    (FAIL_STEP, FAIL_EVALUATIONS, FAIL_RHS or FAIL_NONFINITE; t; ...)."""
+    min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
+    rejected = False
+    while True:
+        if not h_abs >= min_step:  # also a NaN step (a non-finite error estimate)
+            return FAIL_STEP, t, 0.0, h_abs
+        if counters[2] + ws.counters[0] >= bounds[0]:  # rejected steps count too
+            counters[2] += ws.counters[0]
+            return FAIL_EVALUATIONS, t, 0.0, h_abs
+        t_new = min(t + h_abs, t_end)
+        h = t_new - t
+        h_abs = abs(h)
+        for i in range(y.size):
+            K[0, i] = f[i]
+        if stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws, tmp) != 0:
+            return FAIL_RHS, t, h, h_abs
+        combine(tab, n_stages, y, h, K, y_new)
+        if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+            return FAIL_RHS, t, h, h_abs
+        for i in range(y.size):
+            K[n_stages, i] = f_new[i]
+        err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
+        if not np.isfinite(err):  # a non-finite stage: shrinking the step would only hide it
+            return FAIL_NONFINITE, t, h, h_abs
+        if err < 1:
+            factor = MAX_FACTOR if err == 0 else min(MAX_FACTOR, SAFETY * err ** exponent)
+            if rejected:
+                factor = min(1.0, factor)
+            return 0, t_new, h, h_abs * factor
+        h_abs *= max(MIN_FACTOR, SAFETY * err ** exponent)
+        rejected = True
+
+
+@internal()
+def _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds):
+    """Count an accepted step and check the run's bounds after it: -> 0, FAIL_NONFINITE, FAIL_EVALUATIONS or
+    FAIL_STALL (see integrate_segment)."""
+    counters[1] += 1
+    for i in range(f_new.size):
+        if not np.isfinite(f_new[i]):  # RK4 (no error estimate) or an infinite error estimate
+            return FAIL_NONFINITE
+    if counters[2] + ws.counters[0] >= bounds[0]:
+        counters[2] += ws.counters[0]
+        return FAIL_EVALUATIONS
+    if method != RK4_ID and t_new < t_end:
+        counters[5] = counters[5] + 1 if h < bounds[1] else 0
+        if counters[5] >= bounds[2]:
+            counters[2] += ws.counters[0]
+            return FAIL_STALL
+    return 0
+
+
+@internal()
+def _earliest_switch(evaluate, bias, phases, indicators, method, tab, n_stages, n_rows, t_old, h, y, t_new, y_new, f,
+                     f_new, K, D, mode, p, lp, ci, cf, ws, tmp, g_new, g_tmp):
+    """The earliest crossing in the step of a switching function that ended it off its mode's side, located on the
+    step's interpolant (set up into D on the first one): -> (0, t_e, i_e or -1 for none, dense ready), or FAIL_RHS,
+    or FAIL_LOCATE with the i whose crossing cannot be located (``study.laws.events.crossing_finder``)."""
+    if event_values(evaluate, bias, phases, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
+        return FAIL_RHS, t_new, -1, False
+    t_e, i_e, dense_ready = np.inf, -1, False
+    for i in range(g_new.size):
+        if g_new[i] * mode[i] < 0:
+            if not dense_ready:
+                dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D, mode, p,
+                            lp, ci, cf, ws, tmp)
+                dense_ready = True
+            root = first_crossing(mode[i], t_old, t_new, i, evaluate, bias, phases, indicators, method, D, n_rows,
+                                  t_old, h, y, mode, p, lp, ci, cf, ws, tmp, g_tmp)
+            if np.isnan(root):
+                return FAIL_LOCATE, t_old, i, dense_ready
+            if root < t_e:
+                t_e, i_e = root, i
+    return 0, t_e, i_e, dense_ready
+
+
+@internal()
+def _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new, f, f_new, K, D,
+                 dense_ready, t_hi, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out, counters):
+    """The output times due up to t_hi from the step's interpolant (set up into D if not ready): -> 0 or
+    FAIL_PROJECTION."""
+    m, r = ws.q.size, dimensions(ci)[1]
+    while _due(t_out, counters[0], t_hi):
+        if not dense_ready:
+            dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D, mode, p, lp,
+                        ci, cf, ws, tmp)
+            dense_ready = True
+        tk = t_out[counters[0]]
+        dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
+        if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+            return FAIL_PROJECTION
+    return 0
+
+
+@internal()
+def _project_step(evaluate, bias, phases, kinematics, t_new, y_new, f_new, mode, p, lp, ci, cf, ws, counters):
+    """The post-step projection of y_new (f_new evaluated again if it moved): -> 0, FAIL_PROJECTION or FAIL_RHS."""
+    changed, status = project(kinematics, y_new, p, ci, cf, ws.q.size, dimensions(ci)[1])
+    if status != 0:
+        return FAIL_PROJECTION
+    if changed:
+        counters[3] += 1
+        if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+            return FAIL_RHS
+    return 0
+
+
+@internal()
+def _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end):
+    """The end of the run reached: the output times due at t (the last equals t_end), the state to y_end."""
+    m, r = ws.q.size, dimensions(ci)[1]
+    while counters[0] < t_out.size and _due(t_out, counters[0], t + 1e-300):
+        if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+            return FAIL_PROJECTION, t, -1
+    for i in range(y.size):
+        y_end[i] = y[i]
+    counters[2] += ws.counters[0]
+    return DONE, t, -1
+
+
 @kernel()   # compiled (or loaded) for SEGMENT on first use (study.fast.frontend.entry)
 def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0,
                       t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
@@ -210,143 +301,56 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
     m, r, nc, nw, npin = dimensions(ci)
     ws = workspace(m, r, nc, nw, npin)
     n_events = ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
-    projecting = ci[CI_PROJECTS] == 1
     n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
-    K = np.zeros((max(n_k, 4), n))
-    D = np.zeros((max(n_rows, 4), n))
+    K, D = np.zeros((max(n_k, 4), n)), np.zeros((max(n_rows, 4), n))
     y, y_new, f, f_new, tmp = y0.copy(), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     g_new, g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
     t = t0
-    if rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, f) != 0:
-        return _rhs_failed(ws, y_end, counters)
-    if counters[4] == 1:
-        counters[4] = 0
-        while _due(t_out, counters[0], t):
-            if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
-                return FAIL_PROJECTION, t, -1
-    if method == RK4_ID:
-        h_abs = first_step
-    elif first_step > 0:
-        h_abs = first_step
-    else:
-        h_abs, status = select_initial_step(evaluate, bias, phases, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci,
-                                            cf, ws, tmp, f_new)
-        if status != 0:
-            return _rhs_failed(ws, y_end, counters)
+    status, h_abs = _start(evaluate, bias, phases, kinematics, method, order, t, y, t_end, first_step, rtol, atol, f,
+                           mode, p, lp, ci, cf, ws, tmp, f_new, t_out, y_out, mode_out, counters)
+    if status != 0:
+        return _failed(status, t, ws, y_end, counters)
     exponent = -1.0 / (order + 1)
     while t < t_end:
         t_old = t
-        # --- one accepted step ---------------------------------------------------------------
-        if method == RK4_ID:
-            h = min(h_abs, t_end - t)
-            for i in range(n):
-                K[0, i] = f[i]
-            if stages(evaluate, bias, phases, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
-                return _rhs_failed(ws, y_end, counters)
-            combine(tab, 4, y, h, K, y_new)
-            t_new = t + h
-            if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                return _rhs_failed(ws, y_end, counters)
+        if method == RK4_ID:   # --- one accepted step ---------------------------------------------------------
+            status, t_new, h = _rk4_step(evaluate, bias, phases, tab, t, y, h_abs, t_end, K, f, y_new, f_new, mode, p,
+                                         lp, ci, cf, ws, tmp)
         else:
-            min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
-            rejected = False
-            while True:
-                if not h_abs >= min_step:  # also a NaN step (a non-finite error estimate)
-                    return FAIL_STEP, t, -1
-                if counters[2] + ws.counters[0] >= bounds[0]:  # rejected steps count too
-                    counters[2] += ws.counters[0]
-                    return FAIL_EVALUATIONS, t, -1
-                t_new = min(t + h_abs, t_end)
-                h = t_new - t
-                h_abs = abs(h)
-                for i in range(n):
-                    K[0, i] = f[i]
-                if stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws,
-                          tmp) != 0:
-                    return _rhs_failed(ws, y_end, counters)
-                combine(tab, n_stages, y, h, K, y_new)
-                if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                    return _rhs_failed(ws, y_end, counters)
-                for i in range(n):
-                    K[n_stages, i] = f_new[i]
-                err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
-                if not np.isfinite(err):  # a non-finite stage: shrinking the step would only hide it
-                    return FAIL_NONFINITE, t, -1
-                if err < 1:
-                    factor = MAX_FACTOR if err == 0 else min(MAX_FACTOR, SAFETY * err ** exponent)
-                    if rejected:
-                        factor = min(1.0, factor)
-                    h_abs *= factor
-                    break
-                h_abs *= max(MIN_FACTOR, SAFETY * err ** exponent)
-                rejected = True
-        counters[1] += 1
-        for i in range(n):
-            if not np.isfinite(f_new[i]):  # RK4 (no error estimate) or an infinite error estimate
-                return FAIL_NONFINITE, t_new, -1
-        if counters[2] + ws.counters[0] >= bounds[0]:
-            counters[2] += ws.counters[0]
-            return FAIL_EVALUATIONS, t_new, -1
-        if method != RK4_ID and t_new < t_end:
-            counters[5] = counters[5] + 1 if h < bounds[1] else 0
-            if counters[5] >= bounds[2]:
-                counters[2] += ws.counters[0]
-                return FAIL_STALL, t_new, -1
+            status, t_new, h, h_abs = _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y,
+                                                     h_abs, t_end, rtol, atol, K, f, y_new, f_new, mode, p, lp, ci, cf,
+                                                     ws, tmp, counters, bounds)
+        if status == 0:
+            status = _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds)
+        if status != 0:
+            return _failed(status, t_new, ws, y_end, counters)
         dense_ready = False
-        # --- 1. switches ----------------------------------------------------------------------
-        if n_events > 0:
-            if event_values(evaluate, bias, phases, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
-                return _rhs_failed(ws, y_end, counters)
-            t_e, i_e = np.inf, -1
-            for i in range(n_events):
-                if g_new[i] * mode[i] < 0:
-                    if not dense_ready:
-                        dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
-                                    mode, p, lp, ci, cf, ws, tmp)
-                        dense_ready = True
-                    root = first_crossing(evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y, t_new, i,
-                                          mode, p, lp, ci, cf, ws, tmp, g_tmp)
-                    if np.isnan(root):
-                        counters[2] += ws.counters[0]
-                        return FAIL_LOCATE, t_old, i
-                    if root < t_e:
-                        t_e, i_e = root, i
+        if n_events > 0:   # --- 1. switches -------------------------------------------------------------------
+            status, t_e, i_e, dense_ready = _earliest_switch(evaluate, bias, phases, indicators, method, tab, n_stages,
+                                                             n_rows, t_old, h, y, t_new, y_new, f, f_new, K, D, mode, p,
+                                                             lp, ci, cf, ws, tmp, g_new, g_tmp)
+            if status == FAIL_LOCATE:
+                counters[2] += ws.counters[0]
+                return FAIL_LOCATE, t_old, i_e
+            if status != 0:
+                return _failed(status, t_new, ws, y_end, counters)
             if i_e >= 0:
                 dense_eval(method, D, n_rows, y, (t_e - t_old) / h, y_end)
-                while _due(t_out, counters[0], t_e):
-                    tk = t_out[counters[0]]
-                    dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
-                    if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
-                        return FAIL_PROJECTION, t, -1
+                if _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new,
+                                f, f_new, K, D, True, t_e, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out,
+                                counters) != 0:
+                    return FAIL_PROJECTION, t, -1
                 counters[2] += ws.counters[0]
                 return EVENT, t_e, i_e
-        # --- 3. samples (before the projection, as in the reference) ---------------------------
-        while _due(t_out, counters[0], t_new):
-            if not dense_ready:
-                dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D,
-                            mode, p, lp, ci, cf, ws, tmp)
-                dense_ready = True
-            tk = t_out[counters[0]]
-            dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
-            if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
-                return FAIL_PROJECTION, t, -1
-        # --- 2. projection ------------------------------------------------------------------------
-        if projecting:
-            changed, status = project(kinematics, y_new, p, ci, cf, m, r)
-            if status != 0:
-                return FAIL_PROJECTION, t_new, -1
-            if changed:
-                counters[3] += 1
-                if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
-                    return _rhs_failed(ws, y_end, counters)
-        t = t_new
-        for i in range(n):
-            y[i] = y_new[i]
-            f[i] = f_new[i]
-    while counters[0] < t_out.size and _due(t_out, counters[0], t + 1e-300):
-        if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+        # --- 3. samples (before the projection, as in the reference), 2. projection ------------------------------
+        if _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new, f, f_new,
+                        K, D, dense_ready, t_new, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out, counters) != 0:
             return FAIL_PROJECTION, t, -1
-    for i in range(n):
-        y_end[i] = y[i]
-    counters[2] += ws.counters[0]
-    return DONE, t, -1
+        if ci[CI_PROJECTS] == 1:
+            status = _project_step(evaluate, bias, phases, kinematics, t_new, y_new, f_new, mode, p, lp, ci, cf, ws,
+                                   counters)
+            if status != 0:
+                return _failed(status, t_new, ws, y_end, counters)
+        t = t_new
+        y[:], f[:] = y_new, f_new
+    return _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end)

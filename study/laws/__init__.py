@@ -18,4 +18,10 @@ stabilization
 projection
     The post-step projection: the minimum-norm or mass-weighted correction (truncated least squares) and the
     position and velocity iterations with their tolerance and iteration bound.
+events
+    Event location: the first crossing of a switching function within a step (a scan at ``SCAN_POINTS``, then
+    Brent's method to ``BRENT_XTOL``/``BRENT_RTOL``).
+modes
+    The mode switch: the mode at t0 (signs, zeros settled by a look-ahead) and after a located crossing (the entry
+    flipped or the rule's own switch; at most ``MAX_EVENTS`` per run).
 """

@@ -2,9 +2,10 @@
 
 One stepping loop serves every method (``INTEGRATORS``). After each accepted step it
 
-1. checks the switching functions of discontinuous loads; if one changed sign, the crossing is
-   located on the step's dense output (Brent), the solution is cut there, the load's mode is
-   flipped and the integrator restarts from the event (so the switch is located, not smeared);
+1. checks the switching functions; if one left its mode's side, the crossing is located on the
+   step's dense output (``study.laws.events.crossing_finder``: a scan, then Brent's method, run as
+   Python), the solution is cut there, the mode switches (``study.laws.modes.switch``) and the
+   integrator restarts from the event (so the switch is located, not smeared);
 2. applies the post-step correction (projection), if the stabilization has one;
 3. samples the requested output times from the step's dense output.
 """
@@ -16,9 +17,10 @@ from typing import Callable
 
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK23, RK45, DenseOutput, OdeSolver, Radau
-from scipy.optimize import brentq
 
 from study.errors import RunBoundError
+from study.laws.events import crossing_finder
+from study.laws.modes import as_mode, initial_mode, switch
 from study.reference_data import tolerance
 
 Array = np.ndarray
@@ -86,42 +88,6 @@ INTEGRATORS: dict[str, type[OdeSolver]] = {
 }
 # Methods whose state may be replaced between steps (projection): y plus the cached first stage f.
 PROJECTABLE = ("RK45", "DOP853", "RK23", "RK4")
-# Brent's root finder locates a switch to xtol + rtol |t| (scipy's brentq with its finest rtol).
-BRENT_XTOL, BRENT_RTOL = 1e-14, 4 * np.finfo(float).eps
-MAX_EVENTS = 100_000  # more switches than this in one run means chattering on a switching surface
-
-
-SCAN_POINTS = 16  # interpolant samples that find the return to the mode's side (see _first_crossing)
-
-
-def _first_crossing(g: Callable[[float], float], sign: int, t_lo: float, t_hi: float) -> float:
-    """The first time in [t_lo, t_hi] at which g leaves the side ``sign`` (g(t_hi) * sign < 0).
-
-    Normally g(t_lo) is on the side ``sign`` and Brent's method brackets [t_lo, t_hi]. The step can
-    also start on the far side: right after a located switch g(t_lo) is zero up to round-off and may
-    carry the old sign, and a post-step projection moves the state (a position by ~1e-6 m at rtol 1e-4) and
-    can take it back across the switching surface. Then g is sampled at ``SCAN_POINTS`` points:
-
-    * if it comes back to the side ``sign`` and leaves it again within the step (a second crossing,
-      seen at loose tolerances where a step spans a reversal), that later crossing is bracketed;
-    * if it stays on the far side throughout, the switch is at t_lo: the state the step starts from
-      is already across, so the mode flips there.
-
-    Raises ValueError (from brentq) only if no bracket exists at all.
-    """
-    if g(t_lo) * sign >= 0:
-        return brentq(g, t_lo, t_hi, xtol=BRENT_XTOL, rtol=BRENT_RTOL)
-    ts = np.linspace(t_lo, t_hi, SCAN_POINTS + 1)
-    side = np.array([g(s) * sign for s in ts])
-    back = np.flatnonzero(side[1:] >= 0)
-    if back.size == 0:
-        return t_lo
-    j = back[0] + 1
-    away = np.flatnonzero(side[j:] < 0)
-    if away.size == 0:
-        raise ValueError(f"the interpolant returns to the side {sign:+d} at t = {ts[j]:.9g} s and stays there")
-    leave = j + away[0]
-    return brentq(g, ts[leave - 1], ts[leave], xtol=BRENT_XTOL, rtol=BRENT_RTOL)
 
 
 @dataclass
@@ -135,20 +101,6 @@ class Trajectory:
     steps: int = 0
     restarts: int = 0
     projections: int = 0
-
-
-def initial_mode(indicators: Callable[[float, Array], Array] | None, t0: float, y0: Array,
-                 rhs: Callable) -> tuple | None:
-    """Signs of the switching functions at t0; a zero takes the sign it has just after t0."""
-    if indicators is None:
-        return None
-    g = np.asarray(indicators(t0, y0))
-    mode = np.where(g >= 0, 1, -1)
-    if np.any(g == 0):
-        dt = 1e-9
-        g_ahead = np.asarray(indicators(t0 + dt, y0 + dt * rhs(t0, y0, tuple(mode))))
-        mode = np.where(g == 0, np.where(g_ahead >= 0, 1, -1), mode)
-    return tuple(int(s) for s in mode)
 
 
 def integrate(
@@ -205,112 +157,136 @@ def integrate(
     if post_step is not None and method not in PROJECTABLE:
         raise ValueError(f"post-step projection needs an integrator whose state can be replaced between steps "
                          f"({', '.join(PROJECTABLE)}); got {method!r}")
-    cls = INTEGRATORS[method]
-    if switching is not None:
-        if indicators is not None:
-            raise ValueError("give either indicators or switching, not both (a switching rule has its own indicators)")
-        mode = tuple(switching.initial_mode(t0, np.array(y0, dtype=float)))
-
-        def indicators(tt, yy):  # the current mode is read when called, so it follows every switch
-            return switching.indicators(tt, yy, mode)
-    else:
-        mode = initial_mode(indicators, t0, y0, rhs)
-    t_out = np.asarray(t_out, dtype=float)
-    samples_t, samples_y, modes = [], [], []
-    k_out = 0
-    traj = Trajectory(np.empty(0), np.empty((0, len(y0))), [])
-
-    def sample(dense, t_lo, t_hi, inclusive_lo):
-        nonlocal k_out
-        while k_out < len(t_out) and (t_out[k_out] < t_hi or np.isclose(t_out[k_out], t_hi, rtol=0, atol=1e-12 * max(1, abs(t_hi)))):
-            tk = t_out[k_out]
-            if tk < t_lo and not inclusive_lo:
-                k_out += 1
-                continue
-            yk = dense(tk) if dense is not None else y_cur
-            if post_step is not None:
-                yk = post_step(yk)[0]
-            samples_t.append(tk)
-            samples_y.append(yk)
-            modes.append(mode)
-            k_out += 1
-
-    t, y_cur = float(t0), np.array(y0, dtype=float)
-    if monitor is not None:
-        monitor(t, y_cur)
-    sample(None, t, t, True)
-
-    def stop(reason: str, t_now: float, y_now: Array, h: float) -> RunBoundError:
-        extra = describe(t_now, y_now) if describe is not None else ""
-        return RunBoundError(f"{method} stopped at t = {t_now:.9g} s after {traj.steps} steps: {reason}"
-                             f"{'; ' + extra if extra else ''}", t=float(t_now), quantity="step", step=h, steps=traj.steps)
+    if switching is not None and indicators is not None:
+        raise ValueError("give either indicators or switching, not both (a switching rule has its own indicators)")
     options = {"rtol": rtol, "atol": atol} if method != "RK4" else {}
     if step is not None:
         options["first_step"] = step
-    small_run, small_limit = 0, int(tolerance("min_step_run"))
-    while t < t_end:
-        solver = cls(lambda tt, yy: rhs(tt, yy, mode), t, y_cur, t_end, **options)
-        traj.restarts += 1
-        event_hit = False
+    run = _Run(rhs, method, options, np.asarray(t_out, dtype=float), post_step, monitor, progress, min_step, describe)
+    run.start(float(t0), np.array(y0, dtype=float), indicators, switching)
+    return run.until(t_end)
+
+
+class _Run:
+    """One call of :func:`integrate`: the loop's state (time, state, mode, samples, counts) and its steps."""
+
+    def __init__(self, rhs, method, options, t_out, post_step, monitor, progress, min_step, describe):
+        self.rhs, self.method, self.options, self.t_out = rhs, method, options, t_out
+        self.post_step, self.monitor, self.progress, self.describe = post_step, monitor, progress, describe
+        self.min_step, self.small_run, self.small_limit = min_step, 0, int(tolerance("min_step_run"))
+        self.samples_t, self.samples_y, self.modes, self.k_out = [], [], [], 0
+        self.traj = Trajectory(np.empty(0), np.empty((0, 0)), [])
+
+    def start(self, t0: float, y0: Array, indicators, switching) -> None:
+        """The state and mode at t0 (the switching rule's, else the indicators' signs), checked and sampled."""
+        self.t, self.y, self.switching = t0, y0, switching
+        if switching is not None:
+            self.mode = as_mode(switching.initial_mode(t0, y0.copy()))
+
+            def indicators(tt, yy):  # the current mode is read when called, so it follows every switch
+                return switching.indicators(tt, yy, self.mode)
+        else:
+            self.mode = initial_mode(indicators, t0, y0, self.rhs)
+        self.indicators = indicators
+        if self.monitor is not None:
+            self.monitor(self.t, self.y)
+        self.sample(None, self.t, self.t, True)
+
+    def until(self, t_end: float) -> Trajectory:
+        """Integrate to t_end, restarting the integrator at every located switch."""
+        while self.t < t_end:
+            solver = INTEGRATORS[self.method](lambda tt, yy: self.rhs(tt, yy, self.mode), self.t, self.y, t_end,
+                                              **self.options)
+            self.traj.restarts += 1
+            if not self.segment(solver):
+                break
+        if self.k_out < len(self.t_out):  # the last output time equals t_end
+            self.sample(None, self.t, self.t + 1e-300, True)
+        traj = self.traj
+        traj.t, traj.y, traj.modes = np.asarray(self.samples_t), np.asarray(self.samples_y), self.modes
+        return traj
+
+    def segment(self, solver: OdeSolver) -> bool:
+        """Step ``solver`` to its end (False) or to the first located switch (True: restart from there)."""
         while solver.status == "running":
             t_old = solver.t
-            message = solver.step()
-            if solver.status == "failed":
-                raise stop(f"{message} (step size collapsed)", t_old, solver.y, getattr(solver, "h_abs", 0.0))
-            h_taken = solver.t - t_old
-            traj.steps += 1
-            small = min_step is not None and solver.status == "running" and method != "RK4" and h_taken < min_step
-            small_run = small_run + 1 if small else 0
-            if small_run >= small_limit:
-                raise stop(f"{small_run} steps in a row below min_step = {min_step:.3g} s (the last h = {h_taken:.3g} s; "
-                           f"a stall: the solution is near a singularity or a discontinuity; min_step= overrides)",
-                           solver.t, solver.y, h_taken)
+            self.step(solver)
             dense = solver.dense_output()
-            if indicators is not None:
-                g_new = np.asarray(indicators(solver.t, solver.y))
-                flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
-                if flipped:
-                    try:
-                        roots = [(_first_crossing(lambda s, i=i: indicators(s, dense(s))[i], mode[i], t_old,
-                                                  solver.t), i) for i in flipped]
-                    except ValueError as exc:  # no sign change on the step's interpolant: it is not resolved
-                        raise stop(f"the switch of switching function(s) {flipped} cannot be located within the "
-                                   f"step from t = {t_old:.9g} s ({exc}): the step h = {solver.t - t_old:.3g} s is too "
-                                   f"large for the solution (use a smaller step or an adaptive integrator)",
-                                   solver.t, solver.y, solver.t - t_old) from None
-                    t_e, i_e = min(roots)
-                    sample(dense, t_old, t_e, False)
-                    y_cur = dense(t_e)
-                    t = t_e
-                    if switching is not None:
-                        mode = tuple(switching.on_event(t_e, y_cur, mode, i_e))
-                    else:
-                        new_mode = list(mode)
-                        new_mode[i_e] = -new_mode[i_e]
-                        mode = tuple(new_mode)
-                    traj.events.append({"t": t_e, "indicator": i_e, "new_sign": mode[i_e]})
-                    if len(traj.events) > MAX_EVENTS:
-                        raise RuntimeError(f"more than {MAX_EVENTS} switches by t = {t_e:.9g}: the solution chatters "
-                                           f"on switching function {i_e}")
-                    event_hit = True
-                    break
-            sample(dense, t_old, solver.t, False)
-            if post_step is not None:
-                y_new, changed = post_step(solver.y)
+            if self.indicators is not None and self.switched(solver, t_old, dense):
+                return True
+            self.sample(dense, t_old, solver.t, False)
+            if self.post_step is not None:
+                y_new, changed = self.post_step(solver.y)
                 if changed:
-                    traj.projections += 1
+                    self.traj.projections += 1
                     solver.y = y_new
                     solver.f = solver.fun(solver.t, y_new)
-            t, y_cur = solver.t, solver.y
-            if monitor is not None:
-                monitor(t, y_cur)
-            if progress is not None:
-                progress(t)
-        if not event_hit:
-            break
-    if k_out < len(t_out):  # the last output time equals t_end
-        sample(None, t, t + 1e-300, True)
-    traj.t = np.asarray(samples_t)
-    traj.y = np.asarray(samples_y)
-    traj.modes = modes
-    return traj
+            self.t, self.y = solver.t, solver.y
+            if self.monitor is not None:
+                self.monitor(self.t, self.y)
+            if self.progress is not None:
+                self.progress(self.t)
+        return False
+
+    def step(self, solver: OdeSolver) -> None:
+        """One accepted step of ``solver``; a failed step or a stall (``min_step``) stops the run."""
+        t_old = solver.t
+        message = solver.step()
+        if solver.status == "failed":
+            raise self.stop(f"{message} (step size collapsed)", t_old, solver.y, getattr(solver, "h_abs", 0.0))
+        h_taken = solver.t - t_old
+        self.traj.steps += 1
+        small = (self.min_step is not None and solver.status == "running" and self.method != "RK4"
+                 and h_taken < self.min_step)
+        self.small_run = self.small_run + 1 if small else 0
+        if self.small_run >= self.small_limit:
+            raise self.stop(f"{self.small_run} steps in a row below min_step = {self.min_step:.3g} s (the last h = "
+                            f"{h_taken:.3g} s; a stall: the solution is near a singularity or a discontinuity; "
+                            f"min_step= overrides)", solver.t, solver.y, h_taken)
+
+    def switched(self, solver: OdeSolver, t_old: float, dense) -> bool:
+        """Whether a switching function left its mode's side in the step; if so, the earliest crossing is located
+        on the step's dense output (``study.laws.events.crossing_finder``), the samples before it are taken, and
+        the run moves to it in the new mode (``study.laws.modes.switch``)."""
+        mode = self.mode
+        g_new = np.asarray(self.indicators(solver.t, solver.y))
+        flipped = [i for i, g in enumerate(g_new) if g * mode[i] < 0]
+        if not flipped:
+            return False
+        roots = [(float(crossing_finder(lambda s, i=i: self.indicators(s, dense(s))[i])(mode[i], t_old, solver.t)), i)
+                 for i in flipped]
+        lost = [i for root, i in roots if np.isnan(root)]
+        if lost:  # no sign change on the step's interpolant: it is not resolved
+            raise self.stop(f"the switch of switching function(s) {lost} cannot be located within the step from "
+                            f"t = {t_old:.9g} s (its interpolant returns to the side it started on and stays there, "
+                            f"or shows no sign change): the step h = {solver.t - t_old:.3g} s is too large for the "
+                            f"solution (use a smaller step or an adaptive integrator)",
+                            solver.t, solver.y, solver.t - t_old)
+        t_e, i_e = min(roots)
+        self.sample(dense, t_old, t_e, False)
+        self.t, self.y = t_e, dense(t_e)
+        self.mode = switch(self.switching, t_e, self.y, mode, i_e, self.traj.events)
+        return True
+
+    def sample(self, dense, t_lo: float, t_hi: float, inclusive_lo: bool) -> None:
+        """The output times up to t_hi (from t_lo, or after it) from ``dense``, or the current state (None)."""
+        t_out = self.t_out
+        while self.k_out < len(t_out) and (t_out[self.k_out] < t_hi or np.isclose(
+                t_out[self.k_out], t_hi, rtol=0, atol=1e-12 * max(1, abs(t_hi)))):
+            tk = t_out[self.k_out]
+            self.k_out += 1
+            if tk < t_lo and not inclusive_lo:
+                continue
+            yk = dense(tk) if dense is not None else self.y
+            if self.post_step is not None:
+                yk = self.post_step(yk)[0]
+            self.samples_t.append(tk)
+            self.samples_y.append(yk)
+            self.modes.append(self.mode)
+
+    def stop(self, reason: str, t_now: float, y_now: Array, h: float) -> RunBoundError:
+        """The error that ends the run at t_now: ``reason``, with ``describe``'s note on the state."""
+        extra = self.describe(t_now, y_now) if self.describe is not None else ""
+        return RunBoundError(f"{self.method} stopped at t = {t_now:.9g} s after {self.traj.steps} steps: {reason}"
+                             f"{'; ' + extra if extra else ''}", t=float(t_now), quantity="step", step=h,
+                             steps=self.traj.steps)

@@ -8,6 +8,7 @@ import numpy as np
 
 from study.errors import SimulationError
 from study.laws.contact import CONSISTENCY_RTOL
+from study.laws.modes import LOOKAHEAD, as_mode, flip, settle_zeros, signs
 from study.solver.friction.contact import FrictionDynamics, PainleveError
 
 Array = np.ndarray
@@ -63,23 +64,17 @@ class StickSlipSwitching:
         friction = []
         for j in range(nc):
             friction += [-1, int(np.sign(v_t[j])) or 1]
-        load = []
-        if dyn.n_load_modes:
-            g = np.asarray(eom.indicators(t0, q, qd), dtype=float)
-            load = [1 if gi >= 0 else -1 for gi in g]
-        mode = tuple(load + friction)
+        g0 = np.asarray(eom.indicators(t0, q, qd), dtype=float) if dyn.n_load_modes else np.zeros(0)
+        mode = as_mode(signs(g0)) + tuple(friction)
         # contacts at rest: stick if the static limit allows it, else slide where the loads push. A subnormal
         # velocity (below the smallest normal double, ~2.2e-308) is rest too: it carries no reliable sign
         for j in range(nc):
             if abs(v_t[j]) < np.finfo(float).tiny:
                 mode = self._rest_decision(t0, q, qd, mode, j, record=False)
-        if dyn.n_load_modes and np.any(np.asarray(eom.indicators(t0, q, qd)) == 0):
-            dt = 1e-9  # as integrate.initial_mode: a zero takes the sign it has just after t0
-            y_ahead = y0 + dt * dyn.rhs(t0, y0, mode)
-            g_ahead = np.asarray(eom.indicators(t0 + dt, *self._state(y_ahead)), dtype=float)
-            g0 = np.asarray(eom.indicators(t0, q, qd), dtype=float)
-            load = [(1 if ga >= 0 else -1) if gz == 0 else mi for gz, ga, mi in zip(g0, g_ahead, mode)]
-            mode = tuple(load) + mode[dyn.n_load_modes:]
+        if np.any(g0 == 0):  # a load's zero takes the sign it has just after t0 (the rule of study.laws.modes)
+            y_ahead = y0 + LOOKAHEAD * dyn.rhs(t0, y0, mode)
+            g_ahead = np.asarray(eom.indicators(t0 + LOOKAHEAD, *self._state(y_ahead)), dtype=float)
+            mode = as_mode(settle_zeros(np.asarray(mode, dtype=np.int64), g0, g_ahead))
         self.transitions.append({"t": float(t0), "contact": None, "initial": self.describe(mode)})
         return mode
 
@@ -258,9 +253,7 @@ class StickSlipSwitching:
     def _switch(self, t: float, y: Array, mode, i: int) -> tuple:
         dyn = self.dyn
         if i < dyn.n_load_modes:
-            new = list(mode)
-            new[i] = -new[i]
-            return tuple(new)
+            return as_mode(flip(np.asarray(mode, dtype=np.int64), i))
         j, which = divmod(i - dyn.n_load_modes, 2)
         if which == 1:
             raise RuntimeError(f"direction entry of contact {dyn.contact_names[j]!r} crossed zero; its indicator is constant")
