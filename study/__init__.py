@@ -1,4 +1,42 @@
-"""Reproducible validation study of redundant-coordinate multibody methods against Exudyn."""
+"""Reproducible validation study of redundant-coordinate multibody methods against Exudyn.
+
+The public way in: a :class:`Description` (bodies, joints, loads) and its parameters make a :class:`Mechanism`
+(``study.model``; the study's own mechanisms come from the registry ``study.mechanisms.CATALOGUE``); a run
+specification says how to run it, :class:`InHouse` (stabilization method, integrator, friction treatment, backend)
+or :class:`Exudyn` (solver, step); ``run(mechanism, spec, t_end)`` returns a :class:`SimulationResult` for every
+engine. ``simulate`` and ``exudyn_run`` are the same runs by keyword arguments.
+
+Architecture
+------------
+The layers, bottom to top, are ``study.imports.LAYERS`` (a test refuses any import that goes up them):
+base modules (errors, data locations, integrity, results) < ``kernels`` (numba machinery) < ``model`` (description,
+Mechanism, symbolic equations, the one code generator ``model.codegen``, the consistent initial state;
+``mechanisms``; ``spatial``) < ``laws`` < ``solver`` (the reference path: scipy integrators, readable classes) <
+``fast`` (the compiled path: the compiled loop and its frontend) < ``engines``, ``exudyn_models``, ``simulate`` <
+``pipeline`` < studies, report, bench, validation < ``cli``.
+
+Each numerical law has one home in ``study.laws``, compiled with numba; the compiled loop calls it natively, the
+reference loop calls the same compiled function (or, where a Python callable is passed in, its source):
+
+=====================================================  ==========================================================
+law                                                    home
+=====================================================  ==========================================================
+stabilization bias b(Phi, Phidot): none, Baumgarte,    ``study.laws.stabilization``
+sliding mode (and each one's parameter layout)
+post-step projection (correction, position and         ``study.laws.projection``
+velocity iterations)
+friction level, a pin's reaction norm, the friction    ``study.laws.friction``
+treatments' phases (stick flags, slip factors)
+contact and pin solve (normal-force sign hypotheses,   ``study.laws.contact``
+consistency rule, Painleve cases, the pins' Newton
+step)
+event location (scan, then Brent)                      ``study.laws.events``
+mode switch (mode at t0, after a located crossing)     ``study.laws.modes``
+the sgn approximations (sign, sat, tanh, arctan, sqrt) ``study.kernels.signs`` (also the Exudyn guards' tanh)
+code generation (sympy -> CSE -> reference and numba   ``study.model.codegen``
+modules)
+=====================================================  ==========================================================
+"""
 
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError, RunTooLargeError,
                           SimulationError, SingularConfigurationError)

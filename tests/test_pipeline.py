@@ -359,22 +359,24 @@ def _fresh_keys(monkeypatch):
 
 def test_an_edited_description_recomputes_its_own_cases_only(monkeypatch):
     """A change to one mechanism's description changes the keys of its cases and of no other mechanism's."""
-    from study.mechanisms import quick_return
+    import dataclasses
+
+    from study import mechanisms
 
     cases = [pl.Case("s", "g", "inhouse", m, "seed", 1.0, (("method", "none"),)) for m in ("quick_return", "slider_crank")]
     before = [c.key() for c in cases]
-    describe = quick_return.describe
+    catalogue, entry = mechanisms.CATALOGUE, mechanisms.CATALOGUE["quick_return"]
 
     def edited(ps):
-        d = describe(ps)
+        d = entry.describe(ps)
         d.torque("extra", "crank", 0.5 * d.p.m1)
         return d
 
-    monkeypatch.setattr(quick_return, "describe", edited)
+    monkeypatch.setattr(mechanisms, "CATALOGUE", {**catalogue, "quick_return": dataclasses.replace(entry, describe=edited)})
     _fresh_keys(monkeypatch)
     after = [c.key() for c in cases]
     assert after[0] != before[0] and after[1] == before[1]
-    monkeypatch.setattr(quick_return, "describe", describe)
+    monkeypatch.setattr(mechanisms, "CATALOGUE", catalogue)
     _fresh_keys(monkeypatch)
     assert [c.key() for c in cases] == before
 
