@@ -11,8 +11,13 @@ the package names it. :func:`validate` runs, from the consistent initial state o
    at three steps halving from ``h``; each against the in-house reference, with observed orders;
 4. the joint reactions of both engines.
 
-The runs are saved (``runs/``), the tables are written from them (``tables/``), the figures from the tables and the
-saved runs (``figures/``), and ``report.md`` from the tables. Exudyn has regularized friction only, so where a
+The runs are a generated case list (:func:`validation_cases`: cases of the pipeline, :mod:`study.pipeline.cases`,
+whose mechanism is the Mechanism given) run by the pipeline's runner in this process and saved in its store
+(``<cache>/runs``, :mod:`study.cache_folder`), so a second validation of the same mechanism at the same settings
+reads its runs back instead of running them again. Their differences from the reference and Exudyn's observed orders
+are computed by the cross-validation study's functions (:mod:`study.studies.cross_validation`). A copy of each run is
+saved in the report folder (``runs/``), the tables are written from the runs (``tables/``), the figures from the
+tables and the saved runs (``figures/``), and ``report.md`` from the tables. Exudyn has regularized friction only, so where a
 slider or pin has friction the comparison with Exudyn is at the regularized law (width ``friction_eps``) on both sides.
 """
 
@@ -27,19 +32,21 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from study.compare import common_samples, max_deviation, observed_orders
-from study.errors import SimulationError
-from study.errors import ResultIntegrityError
+from study.cache_folder import cache_dir
+from study.errors import ResultIntegrityError, SimulationError
 from study.model import Mechanism
 from study.output_folder import claim_output_folder
+from study.pipeline import Case, Store
 from study.pipeline.tables import forget_table, table_names, write_table
 from study.reference_data import tolerance
 from study.results import SimulationResult
-from study.solver.friction import PainleveError
+from study.studies.cross_validation import joint_force_deviations, state_deviations, with_orders
 
 METHODS = ("none", "baumgarte", "sliding_mode", "projection")
 EXUDYN_SOLVERS = ("index3", "index2")
 EVERYDAY = {"integrator": "DOP853", "rtol": 1e-8, "atol": 1e-10}
+FIELDS = ("max_abs_dq", "max_abs_dqd")   # Exudyn against the in-house reference: these differences and their orders
+STUDY = "validate"   # the study name of the validation's cases
 
 
 @dataclass(frozen=True)
@@ -107,109 +114,173 @@ def _in_house_plan(mech: Mechanism, s: Settings) -> dict[str, dict]:
     return plan
 
 
-def _in_house_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[str, str]]:
-    """The runs of :func:`_in_house_plan`, each with progress lines when long; a run that stops with a simulation
-    error (other than the reference, which everything is compared with) is recorded with it."""
-    from study.progress import ProgressPrinter
-    from study.simulate import simulate
+def validation_cases(mech: Mechanism, s: Settings) -> tuple[Case, ...]:
+    """The validation's case list, the cases the pipeline runs (:mod:`study.pipeline.cases`): the in-house runs of
+    :func:`_in_house_plan` (group = the run's name), then Exudyn at every solver (group ``Exudyn <solver>``) and step
+    (label ``h``); each case's options are its engine's run specification (:func:`study.engines.spec_from_dict`,
+    which refuses a wrong one by name here, before any run), its mechanism is ``mech`` itself."""
+    from study.engines import spec_from_dict
 
-    plan = _in_house_plan(mech, s)
-    runs, failed = {}, {}
-    for k, (name, options) in enumerate(plan.items(), 1):
-        say(f"[{k}/{len(plan)}] in-house {name}")
-        try:
-            runs[name] = simulate(mech, t_end=s.t_end, output_step=s.output_step, **options,
-                                  progress=ProgressPrinter(s.t_end, say, label="    "))
-        except (SimulationError, PainleveError) as exc:
-            if name == "reference":
-                raise
-            failed[name] = f"{type(exc).__name__}: {exc}"
-    return runs, failed
-
-
-def _exudyn_runs(mech: Mechanism, s: Settings, say: Callable[[str], None]) -> tuple[dict, dict[tuple, str]]:
-    """Exudyn at every solver and step; a run Exudyn refuses or that fails is recorded with its error."""
-    from study.exudyn_models import ExudynModelError, ExudynSolverError, run
-
+    plan = [(name, "inhouse", options, ()) for name, options in _in_house_plan(mech, s).items()]
     friction = "regularized" if _friction(mech) else "none"
-    runs, failed = {}, {}
-    plan = [(solver, h) for solver in EXUDYN_SOLVERS for h in s.steps]
-    for k, (solver, h) in enumerate(plan, 1):
-        say(f"[{k}/{len(plan)}] Exudyn {solver} h = {h:g} s ({round(s.t_end / h)} steps)")
-        try:
-            runs[(solver, h)] = run(mech, s.t_end, h, solver=solver, output_step=s.output_step, friction=friction,
-                                    eps=s.friction_eps, configuration="tuned")
-        except (ExudynSolverError, ExudynModelError) as exc:   # a finding of the report, named with its error
-            failed[(solver, h)] = f"{type(exc).__name__}: {exc}"
-    return runs, failed
+    plan += [(f"Exudyn {solver}", "exudyn", {"solver": solver, "h": h, "friction": friction, "eps": s.friction_eps,
+                                            "configuration": "tuned"}, (("h", f"{h:g}"),))
+             for solver in EXUDYN_SOLVERS for h in s.steps]
+    cases = []
+    for group, engine, options, labels in plan:
+        options = {**options, "output_step": s.output_step}
+        spec_from_dict({"engine": engine, **options})
+        cases.append(Case(STUDY, group, engine, mech, mech.parameters.variant, s.t_end, tuple(sorted(options.items())),
+                          labels))
+    return tuple(cases)
 
 
-def tables(mech: Mechanism, s: Settings, inhouse: dict, exudyn: dict, failed: dict,
-           inhouse_failed: dict) -> dict[str, pd.DataFrame]:
-    """The report's tables from the runs."""
-    ref = inhouse["reference"]
+def _announcer(cases: tuple[Case, ...], s: Settings, say: Callable[[str], None]):
+    """What the pipeline calls just before a case runs: its line, and for an in-house run the progress printer."""
+    from study.progress import ProgressPrinter
+
+    inhouse = [c for c in cases if c.engine == "inhouse"]
+    exudyn = [c for c in cases if c.engine == "exudyn"]
+
+    def announce(case: Case):
+        if case.engine == "inhouse":
+            say(f"[{inhouse.index(case) + 1}/{len(inhouse)}] in-house {case.group}")
+            return ProgressPrinter(s.t_end, say, label="    ")
+        h = case.kwargs["h"]
+        say(f"[{exudyn.index(case) + 1}/{len(exudyn)}] Exudyn {case.kwargs['solver']} h = {h:g} s "
+            f"({round(s.t_end / h)} steps)")
+        return None
+    return announce
+
+
+class _Lines:
+    """A text stream whose lines go to ``say``: the pipeline's progress line among the validation's own."""
+
+    def __init__(self, say: Callable[[str], None]):
+        self.say, self.pending = say, ""
+
+    def write(self, text: str) -> int:
+        *lines, self.pending = (self.pending + text).split("\n")
+        for line in lines:
+            self.say(line.lstrip("\r"))
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+def _run(cases: tuple[Case, ...], store: Store, s: Settings,
+         say: Callable[[str], None]) -> tuple[dict[Case, SimulationResult], dict[Case, str]]:
+    """Every case not saved in ``store`` yet run by the pipeline, in this process and in list order (cached: a case
+    saved earlier from the same inputs is read back); returns the results and the failed cases' errors. The reference,
+    which everything is compared with, must succeed."""
+    from study.pipeline import InlineExecutor, run_cases
+
+    done = run_cases(cases, store, InlineExecutor(), title=f"validate {cases[0].mechanism.name}",
+                     stream=_Lines(say), announce=_announcer(cases, s, say))
+    if done.cached:
+        say(f"{done.cached} of {len(cases)} runs re-used from {store.root} (saved earlier from the same inputs)")
+    results = {c: store.load(c) for c in cases if store.has(c)}
+    errors = {c: store.failure(c)["error"] for c in cases if c not in results}
+    reference = cases[0]
+    if reference in errors:
+        raise SimulationError(f"validate: the in-house reference run failed, and every other run is compared with "
+                              f"it: {errors[reference]}")
+    return results, errors
+
+
+def _run_file(case: Case) -> str:
+    """A run's file name in ``out/runs`` (without suffix)."""
+    if case.engine == "exudyn":
+        return f"exudyn_{case.kwargs['solver']}_h{case.kwargs['h']:g}"
+    return "inhouse_" + case.group.replace(" ", "_").replace("(", "").replace(")", "")
+
+
+def tables(mech: Mechanism, results: dict[Case, SimulationResult], errors: dict[Case, str]) -> dict[str, pd.DataFrame]:
+    """The report's tables from the runs (case -> result) and the failed runs' errors; the differences and orders are
+    the cross-validation study's (:mod:`study.studies.cross_validation`)."""
+    ref = next(r for c, r in results.items() if c.group == "reference")
     eom = mech.equations()
     state = mech.initial_state()
     initial = pd.DataFrame({"coordinate": eom.coordinate_names, "q0": state.q, "qd0": state.qd,
                             "independent": [i in mech.parameters.initial.independent
                                             for i in range(eom.n_coordinates)]})
+    convergence = _convergence(results, errors, ref)
+    exudyn = {c.kwargs["h"]: r for c, r in results.items() if c.engine == "exudyn" and c.kwargs["solver"] == "index3"}
+    return {"initial_state": initial, "in_house": _in_house(results, errors, ref), "exudyn_convergence": convergence,
+            "exudyn_orders": _orders(convergence), "reactions": _reactions(mech, ref, exudyn)}
+
+
+def _in_house(results: dict[Case, SimulationResult], errors: dict[Case, str], ref: SimulationResult) -> pd.DataFrame:
+    """One row per in-house run: its settings, its distance from the reference, its constraint and energy errors."""
     rows = []
-    for name, r in inhouse.items():
+    for case, r in results.items():
+        if case.engine != "inhouse":
+            continue
         summary = r.summary()
-        rows.append({"run": name, "integrator": r.meta["integrator"], "rtol": r.meta.get("rtol"),
+        rows.append({"run": case.group, "integrator": r.meta["integrator"], "rtol": r.meta.get("rtol"),
                      "step": r.meta.get("step"), "friction": r.meta.get("friction"),
-                     "max_abs_dq_vs_reference": np.nan if name == "reference" else max_deviation(r, ref, "q"),
+                     "max_abs_dq_vs_reference": np.nan if case.group == "reference"
+                     else state_deviations(r, ref, ("q",))["max_abs_dq"],
                      "max_abs_phi": summary["max_abs_phi"], "max_abs_phidot": summary["max_abs_phidot"],
                      "energy_balance_error_J": summary["energy_error"], "cpu_s": summary["cpu_seconds"],
                      "steps": r.stats.get("steps"), "events": r.stats.get("events"), "error": ""})
-    rows += [{"run": name, "error": error} for name, error in inhouse_failed.items()]
-    methods = pd.DataFrame(rows)
+    rows += [{"run": case.group, "error": error} for case, error in errors.items() if case.engine == "inhouse"]
+    return pd.DataFrame(rows)
+
+
+def _convergence(results: dict[Case, SimulationResult], errors: dict[Case, str], ref: SimulationResult) -> pd.DataFrame:
+    """One row per Exudyn run (solver by solver, h decreasing; the failed ones last): its distance from the reference
+    in q and qd, its constraint and energy errors."""
     rows = []
-    for (solver, h), r in sorted(exudyn.items(), key=lambda item: (EXUDYN_SOLVERS.index(item[0][0]), -item[0][1])):
-        rows.append({"solver": solver, "h": h, "max_abs_dq": max_deviation(r, ref, "q"),
-                     "max_abs_dqd": max_deviation(r, ref, "qd"), "max_abs_phi": r.summary()["max_abs_phi"],
-                     "energy_balance_error_J": r.summary()["energy_error"], "cpu_s": r.stats.get("cpu_seconds"),
-                     "error": ""})
-    rows += [{"solver": solver, "h": h, "error": error} for (solver, h), error in sorted(failed.items())]
-    convergence = pd.DataFrame(rows, columns=["solver", "h", "max_abs_dq", "max_abs_dqd", "max_abs_phi",
-                                              "energy_balance_error_J", "cpu_s", "error"])
+    for case, r in results.items():
+        if case.engine == "exudyn":
+            summary = r.summary()
+            rows.append({"solver": case.kwargs["solver"], "h": case.kwargs["h"], **state_deviations(r, ref, ("q", "qd")),
+                         "max_abs_phi": summary["max_abs_phi"], "energy_balance_error_J": summary["energy_error"],
+                         "cpu_s": r.stats.get("cpu_seconds"), "error": ""})
+    failed = sorted((c.kwargs["solver"], c.kwargs["h"], error) for c, error in errors.items() if c.engine == "exudyn")
+    rows += [{"solver": solver, "h": h, "error": error} for solver, h, error in failed]
+    return pd.DataFrame(rows, columns=["solver", "h", "max_abs_dq", "max_abs_dqd", "max_abs_phi",
+                                       "energy_balance_error_J", "cpu_s", "error"])
+
+
+def _orders(convergence: pd.DataFrame) -> pd.DataFrame:
+    """Each solver's observed orders in q and qd over its successive steps, judged against ``min_order`` where the
+    smallest error is above ``order_error_floor`` (reference/cross_validation.toml)."""
+    ok = with_orders(convergence[convergence["error"] == ""], FIELDS, by=("solver",))
+    floor = tolerance("order_error_floor", table="cross_validation")
+    min_order = tolerance("min_order", table="cross_validation")
     rows = []
-    for solver, g in convergence[convergence["error"] == ""].groupby("solver", sort=False):
+    for solver, g in ok.groupby("solver", sort=False):
         g = g.sort_values("h", ascending=False)
         if len(g) < 2:
             continue
-        for field in ("max_abs_dq", "max_abs_dqd"):
-            orders = observed_orders(g["h"].to_numpy(), g[field].to_numpy())
-            floor = tolerance("order_error_floor", table="cross_validation")
-            rows.append({"solver": solver, "quantity": field[len("max_abs_d"):], "orders": ", ".join(f"{p:.3f}" for p in orders),
+        for field in FIELDS:
+            quantity = field[len("max_abs_d"):]
+            orders = g[f"order_d{quantity}"].to_numpy(float)[1:]
+            rows.append({"solver": solver, "quantity": quantity, "orders": ", ".join(f"{p:.3f}" for p in orders),
                          "min_order": float(orders.min()), "smallest_error": float(g[field].min()),
                          "above_error_floor": bool(g[field].min() > floor),
-                         "meets_min_order": bool(orders.min() >= tolerance("min_order", table="cross_validation"))})
-    orders = pd.DataFrame(rows, columns=["solver", "quantity", "orders", "min_order", "smallest_error",
-                                         "above_error_floor", "meets_min_order"])
-    reactions = _reactions(mech, ref, exudyn)
-    return {"initial_state": initial, "in_house": methods, "exudyn_convergence": convergence, "exudyn_orders": orders,
-            "reactions": reactions}
+                         "meets_min_order": bool(orders.min() >= min_order)})
+    return pd.DataFrame(rows, columns=["solver", "quantity", "orders", "min_order", "smallest_error",
+                                       "above_error_floor", "meets_min_order"])
 
 
-def _reactions(mech: Mechanism, ref: SimulationResult, exudyn: dict) -> pd.DataFrame:
-    """Every joint's reaction, in-house (from the reference) against Exudyn's finest index-3 run."""
+def _reactions(mech: Mechanism, ref: SimulationResult, index3: dict[float, SimulationResult]) -> pd.DataFrame:
+    """Every joint's reaction, in-house (from the reference) against Exudyn's finest index-3 run (by step h)."""
     from study.reactions import joint_reactions
 
-    index3 = sorted((h, r) for (solver, h), r in exudyn.items() if solver == "index3")
-    if not index3:
-        return pd.DataFrame(columns=["reaction", "exudyn_h", "max_abs_in_house_N", "max_abs_difference_N",
-                                     "difference_relative"])
-    h, ex = index3[0]
-    inhouse = joint_reactions(mech, ref)
-    ia, ib = common_samples(ref, ex)
     rows = []
-    for k, v in inhouse.items():
-        if k in ex.forces:
-            scale, diff = float(np.abs(v).max()), float(np.abs(v[ia] - ex.forces[k][ib]).max())
-            rows.append({"reaction": k, "exudyn_h": h, "max_abs_in_house_N": scale, "max_abs_difference_N": diff,
-                         "difference_relative": diff / scale if scale > 0 else np.nan})
-    return pd.DataFrame(rows)
+    if index3:
+        h = min(index3)
+        ex = index3[h]
+        inhouse = {k: v for k, v in joint_reactions(mech, ref).items() if k in ex.forces}
+        rows = [{"reaction": k, "exudyn_h": h, "max_abs_in_house_N": scale, "max_abs_difference_N": diff,
+                 "difference_relative": diff / scale if scale > 0 else np.nan}
+                for k, (diff, scale) in joint_force_deviations(ex, ref, inhouse).items()]
+    return pd.DataFrame(rows, columns=["reaction", "exudyn_h", "max_abs_in_house_N", "max_abs_difference_N",
+                                       "difference_relative"])
 
 
 def validate(mech: Mechanism, settings: Settings, out: str | Path,
@@ -217,12 +288,15 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     """Run a mechanism through every engine and write ``out/report.md`` with its tables, figures and saved runs
     (``runs/``, ``tables/``, ``figures/``). ``out`` must be new, empty or a folder study made (its marker): a user's
     folder is refused before any work. What an earlier validation wrote there is removed first, so nothing of it is
-    read back; nothing else is touched. A failed run is a row of the tables with its error; the reference run must
-    succeed."""
+    read back; nothing else is touched. The runs come from the pipeline's store (:func:`_run`: computed, or read back
+    when an earlier validation saved them). A failed run is a row of the tables with its error; the reference run
+    must succeed (a SimulationError naming its error otherwise)."""
     from study.validation_plan import check_plan
     from study.validation_report import FIGURES, order_lines, write_report
 
     estimate = check_plan(mech, settings, _in_house_plan(mech, settings), len(EXUDYN_SOLVERS))
+    cases = validation_cases(mech, settings)
+    store = Store(cache_dir() / "runs")   # the pipeline's saved runs: a case saved before is not run again
     out = claim_output_folder(Path(out))
     _remove_previous(out, FIGURES)
     (out / "runs").mkdir(exist_ok=True)
@@ -230,13 +304,10 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     say(f"validate {mech.name}: {mech.equations().n_coordinates} coordinates, "
         f"{mech.equations().n_constraints} constraint rows, t_end = {settings.t_end:g} s")
     say(estimate)
-    inhouse, inhouse_failed = _in_house_runs(mech, settings, say)
-    exudyn, failed = _exudyn_runs(mech, settings, say)
-    for name, r in inhouse.items():
-        r.save(out / "runs" / ("inhouse_" + name.replace(" ", "_").replace("(", "").replace(")", "")))
-    for (solver, h), r in exudyn.items():
-        r.save(out / "runs" / f"exudyn_{solver}_h{h:g}")
-    result = tables(mech, settings, inhouse, exudyn, failed, inhouse_failed)
+    results, errors = _run(cases, store, settings, say)
+    for case, r in results.items():
+        r.save(out / "runs" / _run_file(case))
+    result = tables(mech, results, errors)
     command = (f"python -m study validate {mech.parameters.path.with_suffix('.py')} --out {out}"
                if mech.parameters.path.suffix == ".toml" else f"study.validate({mech.name}, ..., out='{out}') again")
     for name, table in result.items():

@@ -143,3 +143,80 @@ def test_an_order_below_its_bound_without_friction_stays_a_finding():
     cart = study.load_mechanism(CART).equations()
     (line,) = order_lines(orders, cart, 1e-3)
     assert "friction_eps = 0.001 m/s" in line and "a finding" not in line
+
+
+# --- the validation is a case list run through the pipeline ----------------------------------------------------------
+PENDULUM = Path(__file__).resolve().parents[1] / "examples" / "pendulum" / "pendulum.py"
+
+
+def test_the_case_list_is_the_pipelines_keyed_by_the_mechanisms_content():
+    """Every run is a pipeline case whose options are its engine's run specification; the key of a Mechanism passed
+    in from Python follows its content (an equal one loaded again: the same keys; another initial state: none)."""
+    import importlib.util
+
+    from study.engines import Exudyn, InHouse, spec_from_dict
+    from study.pipeline import Case
+    from study.validation import validation_cases
+
+    settings = study.ValidationSettings(t_end=0.5)
+    cases = validation_cases(study.load_mechanism(YOKE), settings)
+    assert all(isinstance(c, Case) for c in cases)
+    assert [c.engine for c in cases] == ["inhouse"] * 5 + ["exudyn"] * 6
+    specs = [spec_from_dict({"engine": c.engine, **c.kwargs}) for c in cases]
+    assert all(isinstance(s, InHouse) for s in specs[:5]) and all(isinstance(s, Exudyn) for s in specs[5:])
+    assert [s.h for s in specs[5:]] == settings.steps * 2
+    keys = [c.key() for c in cases]
+    assert len(set(keys)) == len(cases)
+    assert [c.key() for c in validation_cases(study.load_mechanism(YOKE), settings)] == keys
+    spec = importlib.util.spec_from_file_location("example_pendulum", PENDULUM)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    moved = study.Mechanism(example.d, q0={"th": 1.1}, qd0={"th": 0.0})
+    first, second = (validation_cases(m, settings) for m in (example.pendulum, moved))
+    assert not {c.key() for c in first} & {c.key() for c in second}
+
+
+def test_a_second_validation_of_the_same_mechanism_reads_its_runs_back(tmp_path, monkeypatch):
+    """The runs are saved in the pipeline's store: a second validation of an equal mechanism (loaded again) at the
+    same settings runs nothing and writes the same tables."""
+    monkeypatch.setenv("STUDY_CACHE_DIR", str(tmp_path / "cache"))
+    settings = study.ValidationSettings(t_end=0.1)
+    first, second = [], []
+    before = study.validate(study.load_mechanism(YOKE), settings, tmp_path / "a", say=first.append)
+    after = study.validate(study.load_mechanism(YOKE), settings, tmp_path / "b", say=second.append)
+    assert "[1/5] in-house reference" in first and not any("re-used" in line for line in first)
+    assert not any(line.startswith("[") for line in second), second
+    assert any(line.startswith(f"11 of 11 runs re-used from {tmp_path / 'cache' / 'runs'}") for line in second)
+    assert len(list((tmp_path / "cache" / "runs").glob("*.json"))) == 11
+    for name, table in before.items():
+        pd.testing.assert_frame_equal(table, after[name])
+    assert (tmp_path / "b" / "runs" / "inhouse_reference.csv").read_bytes() == \
+        (tmp_path / "a" / "runs" / "inhouse_reference.csv").read_bytes()
+
+
+def test_a_failed_run_is_a_row_with_its_error_and_a_failed_reference_stops(tmp_path, monkeypatch):
+    """A run that stops is recorded by the pipeline and shown as a row with its error; the reference, which every
+    other run is compared with, must succeed."""
+    from study.errors import SimulationError
+    from study.pipeline import execute
+
+    real = execute.run_case
+
+    def failing(group):
+        def run_case(case, progress=None):
+            if case.group == group:
+                raise SimulationError(f"{group} stopped on purpose")
+            return real(case, progress)
+        return run_case
+
+    settings = study.ValidationSettings(t_end=0.1)
+    monkeypatch.setenv("STUDY_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(execute, "run_case", failing("method none"))
+    tables = study.validate(study.load_mechanism(YOKE), settings, tmp_path / "a", say=lambda _: None)
+    runs = tables["in_house"].set_index("run")
+    assert runs.loc["method none", "error"] == "SimulationError: method none stopped on purpose"
+    assert (runs.drop(index="method none")["error"] == "").all()
+    monkeypatch.setenv("STUDY_CACHE_DIR", str(tmp_path / "other_cache"))   # nothing saved: the reference runs
+    monkeypatch.setattr(execute, "run_case", failing("reference"))
+    with pytest.raises(SimulationError, match="the in-house reference run failed.*reference stopped on purpose"):
+        study.validate(study.load_mechanism(YOKE), settings, tmp_path / "b", say=lambda _: None)

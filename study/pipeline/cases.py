@@ -57,6 +57,7 @@ from typing import Any, Iterable, Mapping
 from study import arguments
 from study.locations import CASES_DIR
 from study.mechanisms import is_user_file, named_mechanism
+from study.model import Mechanism
 from study.pipeline.engine_options import check_exudyn_options, check_inhouse_options
 from study.pipeline.keys import code_version, mechanism_hash
 from study.reference_data import tolerance
@@ -85,8 +86,8 @@ class Case:
     study: str
     group: str
     engine: str
-    mechanism: str
-    variant: str
+    mechanism: str | Mechanism   # a study mechanism's name, a user's file (path.py), or a Mechanism passed in from
+    variant: str                 # Python (``study validate``: run in this process, keyed by its content)
     t_end: float
     options: tuple[tuple[str, Any], ...] = ()
     labels: tuple[tuple[str, str], ...] = ()
@@ -108,13 +109,15 @@ class Case:
         return f"{self.study}/{self.group}" + (f" [{inner}]" if inner else "")
 
     def spec(self) -> dict[str, Any]:
-        return {"study": self.study, "group": self.group, "engine": self.engine, "mechanism": self.mechanism,
+        mechanism = self.mechanism if isinstance(self.mechanism, str) else self.mechanism.name
+        return {"study": self.study, "group": self.group, "engine": self.engine, "mechanism": mechanism,
                 "variant": self.variant, "t_end": self.t_end, "options": self.kwargs}
 
     def key(self) -> str:
         """Hash of everything that affects the result (the study and group names do not)."""
+        name = Path(self.mechanism).name if isinstance(self.mechanism, str) else self.mechanism.name
         payload = {   # a user's file by its name, not its folder: the key is the same in every clone
-            "engine": self.engine, "mechanism": Path(self.mechanism).name, "variant": self.variant,
+            "engine": self.engine, "mechanism": name, "variant": self.variant,
             "t_end": self.t_end, "options": self.kwargs, "content": mechanism_hash(self.mechanism, self.variant),
             "code": code_version(self.engine),
         }

@@ -13,31 +13,33 @@ import time
 import traceback
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping
+from typing import Callable, Iterable, Iterator, Mapping
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from study.pipeline.cases import Case
 from study.pipeline.executors import InlineExecutor
-from study.pipeline.keys import code_version
+from study.pipeline.keys import code_version, mechanism_of
 from study.pipeline.store import Store
 from study.results import SimulationResult
 
+Announce = Callable[[Case], "Callable[[float], None] | None"]   # a case about to run -> its progress callback
 
-def run_case(case: Case) -> SimulationResult:
+
+def run_case(case: Case, progress: Callable[[float], None] | None = None) -> SimulationResult:
     """Compute one case (in whatever process the executor chose): its options are a serialized run specification
-    (:func:`study.engines.spec_from_dict`, engine ``case.engine``), run by :func:`study.engines.run`."""
+    (:func:`study.engines.spec_from_dict`, engine ``case.engine``), run by :func:`study.engines.run`; ``progress``
+    (an in-house run): called with the time reached."""
     from study.engines.runner import run, spec_from_dict
-    from study.mechanisms import named_mechanism
 
-    mech = named_mechanism(case.mechanism, case.variant)
+    mech = mechanism_of(case.mechanism, case.variant)
     options = case.kwargs
     options.pop("repeat", None)  # the k-th timing of the same run (a key of its own, the same result)
     q0 = qd0 = None
     if case.engine == "inhouse":
         q0, qd0 = initial_state(case, mech, options)
-    return run(mech, spec_from_dict({"engine": case.engine, **options}), case.t_end, q0=q0, qd0=qd0)
+    return run(mech, spec_from_dict({"engine": case.engine, **options}), case.t_end, q0=q0, qd0=qd0, progress=progress)
 
 
 def initial_state(case: Case, mech, options: dict) -> tuple:
@@ -60,14 +62,14 @@ def initial_state(case: Case, mech, options: dict) -> tuple:
     return q0, qd0
 
 
-def _run_case_timed(case: Case) -> tuple[SimulationResult, float, str]:
+def _run_case_timed(case: Case, progress: Callable[[float], None] | None = None) -> tuple[SimulationResult, float, str]:
     """Run a case; also returns the wall time and the code version of the process that ran it."""
     t0 = time.perf_counter()
     # One BLAS thread, so that a result does not depend on the host's core count (OpenBLAS's threaded kernels round
     # differently: they moved Radau's step sequence on Andrews' squeezer), and so that a worker, which has a core,
     # does not oversubscribe the cores and count its BLAS threads' waiting as the case's process time.
     with threadpool_limits(limits=1, user_api="blas"):
-        result = run_case(case)
+        result = run_case(case, progress)
     return result, time.perf_counter() - t0, code_version(case.engine)
 
 
@@ -125,23 +127,26 @@ def warm_compiled(case: Case) -> None:
     to the first worker and the reference-path and Exudyn cases to the others first, so they find it
     on disk when their turn comes to a compiled case.
     """
-    from study.mechanisms import named_mechanism
     from study.simulate import simulate
 
-    simulate(named_mechanism(case.mechanism, case.variant), t_end=1e-3, output_step=1e-3, backend="compiled",
+    simulate(mechanism_of(case.mechanism, case.variant), t_end=1e-3, output_step=1e-3, backend="compiled",
              friction="none")
 
 
-def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]) -> Iterator[tuple[Case, Future]]:
+def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float],
+              announce: Announce | None) -> Iterator[tuple[Case, Future]]:
     """(case, finished future) pairs as they complete; pending ones are cancelled if the caller stops.
 
     The reference-path cases go first (a worker compiles the compiled path meanwhile), each group longest first
     by the wall ``seconds`` a case took when it last ran (cases not in it first of all): a long case submitted
     last would keep one worker busy after the others ran out of work."""
-    if isinstance(executor, InlineExecutor):  # one at a time, so each is saved before the next starts
+    if isinstance(executor, InlineExecutor):  # one at a time, in list order, so each is saved before the next starts
         for case in todo:
-            yield case, executor.submit(_run_case_timed, case)
+            yield case, executor.submit(_run_case_timed, *((case,) if announce is None else (case, announce(case))))
         return
+    if announce is not None:
+        raise ValueError("run_cases: announce (progress within a run) needs the cases run in this process "
+                         "(InlineExecutor, workers = 1)")
     first = next((c for c in todo if compiled(c)), None)
     if first is not None:   # its errors, if any, are those of the compiled cases, reported with them
         executor.submit(warm_compiled, first)
@@ -156,10 +161,12 @@ def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]
 
 
 def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
-              stream=None, seconds: Mapping[str, float] | None = None) -> RunSummary:
+              stream=None, seconds: Mapping[str, float] | None = None, announce: Announce | None = None) -> RunSummary:
     """Run every case without a saved result on ``executor``; save each as it completes.
 
     ``seconds``: the wall seconds each case (by name) took when it last ran, to start the longest first.
+    ``announce``: called with each case just before it runs (an InlineExecutor's cases only: they run here, in
+    list order); it returns the run's progress callback (the time reached) or None.
 
     Identical cases (same key) run once. A case that raises is recorded (``Store.record_failure``)
     and the others go on. On KeyboardInterrupt the pending cases are cancelled; finished results
@@ -184,7 +191,7 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     if not todo:
         return summary
     progress = Progress(len(todo), f"{title} ({summary.cached} cached)", stream)
-    for case, future in _outcomes(executor, todo, seconds or {}):
+    for case, future in _outcomes(executor, todo, seconds or {}, announce):
         try:
             result, wall, worker_code = future.result()
             if worker_code != code_version(case.engine):  # e.g. a Dask worker with another installed copy

@@ -7,7 +7,7 @@ A case's key (:meth:`study.pipeline.cases.Case.key`) hashes its specification, t
 numerical packages. What those modules do not import (the report, the studies' summaries, the command line)
 does not change a result and is left out. So are the description modules (``study.mechanisms.<name>``): what
 they produce is in the fingerprint, so an edit to one mechanism recomputes that mechanism's cases only, and a
-user's mechanism file is keyed the same way.
+user's mechanism file, or a Mechanism passed in from Python, is keyed the same way.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import json
 from functools import lru_cache
 
 from study.mechanisms import named_mechanism
+from study.model import Mechanism
 from study.results import package_versions
 from study.imports import dependencies
 from study.sources import source_hash
@@ -29,10 +30,17 @@ NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": (
 DESCRIPTIONS = "study.mechanisms."   # the description modules: keyed by what they produce (mechanism_hash)
 
 
+def mechanism_of(mechanism: str | Mechanism, variant: str) -> Mechanism:
+    """A case's mechanism: a study mechanism by name or a user's mechanism file by path, in a variant
+    (:func:`study.mechanisms.named_mechanism`), or a Mechanism passed in from Python (``study validate``), as it is."""
+    return mechanism if isinstance(mechanism, Mechanism) else named_mechanism(mechanism, variant)
+
+
 @lru_cache(maxsize=None)
-def mechanism_hash(mechanism: str, variant: str) -> str:
-    """Fingerprint of a study mechanism (by name) or a user's mechanism file (by path) in a variant."""
-    return named_mechanism(mechanism, variant).fingerprint()
+def mechanism_hash(mechanism: str | Mechanism, variant: str) -> str:
+    """Fingerprint of a case's mechanism (:func:`mechanism_of`): a Mechanism object is keyed by its content, as a
+    user's file is."""
+    return mechanism_of(mechanism, variant).fingerprint()
 
 
 @lru_cache(maxsize=None)

@@ -34,6 +34,9 @@ In-house tree-joint reactions are not multipliers (the relative coordinates elim
 :func:`inhouse_joint_forces` gets every joint's reaction from the description's absolute-coordinate
 equations (:mod:`study.reactions`). Which forces are compared (the contact, the joints) comes from
 the mechanism's description; nothing here names a mechanism.
+
+The differences and orders are computed once, here, for this study and for ``study validate``
+(:mod:`study.validation`): :func:`state_deviations`, :func:`joint_force_deviations` and :func:`with_orders`.
 """
 
 from __future__ import annotations
@@ -103,14 +106,17 @@ def inhouse_joint_forces(result: SimulationResult) -> dict[str, Array]:
     return joint_reactions(load_parameters(result.meta["mechanism"], result.meta["variant"]), result)
 
 
+def state_deviations(run: SimulationResult, ref: SimulationResult,
+                     fields: Iterable[str] = ("q", "qd", "lam")) -> dict[str, float]:
+    """``max_abs_d<field>``: max over common samples and components of |run - ref| of each state field."""
+    ia, ib = common_samples(run, ref)
+    return {f"max_abs_d{f}": float(np.abs(getattr(run, f)[ia] - getattr(ref, f)[ib]).max()) for f in fields}
+
+
 def deviations(run: SimulationResult, ref: SimulationResult) -> dict[str, float]:
     """max over common samples of |run - ref| for q, qd, lam, tangential and normal force."""
+    out = state_deviations(run, ref)
     ia, ib = common_samples(run, ref)
-    out = {
-        "max_abs_dq": float(np.abs(run.q[ia] - ref.q[ib]).max()),
-        "max_abs_dqd": float(np.abs(run.qd[ia] - ref.qd[ib]).max()),
-        "max_abs_dlam": float(np.abs(run.lam[ia] - ref.lam[ib]).max()),
-    }
     nr, nf = normal_force(run), normal_force(ref)
     out["max_abs_dN"] = float(np.abs(nr[ia] - nf[ib]).max()) if nr is not None else float("nan")
     fr, ff = tangential_force(run), tangential_force(ref)
@@ -135,12 +141,18 @@ def reaction_deviations(run: SimulationResult, ref: SimulationResult,
     for i in range(ref.lam.shape[1]):
         out[f"lam{i + 1}"] = (float(np.abs(run.lam[ia, i] - ref.lam[ib, i]).max()),
                               float(np.abs(ref.lam[ib, i]).max()))
-    for name in sorted(ref_joints):
-        if name.endswith("_moment"):  # Exudyn's PrismaticJoint2D outputs no constraint torque
-            continue
-        out[name] = (float(np.abs(run.forces[name][ia] - ref_joints[name][ib]).max()),
-                     float(np.abs(ref_joints[name][ib]).max()))
-    return out
+    return out | joint_force_deviations(run, ref, ref_joints)
+
+
+def joint_force_deviations(run: SimulationResult, ref: SimulationResult,
+                           ref_joints: dict[str, Array]) -> dict[str, tuple[float, float]]:
+    """Per joint force component of ``ref_joints`` (the reactions of the in-house run ``ref``, by name):
+    (max |run's force of that name - in-house|, max |in-house|) over common samples; the moments are left out
+    (Exudyn's PrismaticJoint2D outputs no constraint torque)."""
+    ia, ib = common_samples(run, ref)
+    return {name: (float(np.abs(run.forces[name][ia] - ref_joints[name][ib]).max()),
+                   float(np.abs(ref_joints[name][ib]).max()))
+            for name in sorted(ref_joints) if not name.endswith("_moment")}
 
 
 # --------------------------------------------------------------------------------------------
@@ -171,14 +183,15 @@ def _inhouse_label(case: Case) -> str:
     return f"in-house {o.get('integrator', 'RK45')}{tol} {o.get('method', 'none')}"
 
 
-def _with_orders(frame: pd.DataFrame, columns: Iterable[str]) -> pd.DataFrame:
-    """order_<c>: observed order between this row's h and the next larger h of the same set and solver."""
+def with_orders(frame: pd.DataFrame, columns: Iterable[str], by: Iterable[str] = ("set", "solver")) -> pd.DataFrame:
+    """order_<c>: observed order between this row's step h and the next larger h of the same ``by`` group (the same
+    set and solver); a row without a step (an in-house run, h NaN) or whose error or its predecessor's is not a
+    finite number > 0 has none (NaN)."""
     frame = frame.copy()
     for c in columns:
         frame[f"order_{c.removeprefix('max_abs_')}"] = np.nan
-    exu = frame["engine"] == "exudyn"
-    for _, idx in frame[exu].groupby(["set", "solver"]).groups.items():
-        sub = frame.loc[idx].sort_values("h", ascending=False)
+    for _, group in frame[frame["h"].notna()].groupby(list(by)):
+        sub = group.sort_values("h", ascending=False)
         for c in columns:
             e, h = sub[c].to_numpy(float), sub["h"].to_numpy(float)
             for k in range(1, len(sub)):
@@ -240,7 +253,7 @@ def summarize(cases: list[Case], load: Callable[[Case], SimulationResult]) -> di
     sort = ["mechanism", "variant", "friction", "engine", "solver", "h"]
     agreement = pd.DataFrame(rows)
     if not agreement.empty:
-        agreement = _with_orders(agreement, ["max_abs_dq", "max_abs_dqd", "max_abs_dF_friction", "max_abs_dN",
+        agreement = with_orders(agreement, ["max_abs_dq", "max_abs_dqd", "max_abs_dF_friction", "max_abs_dN",
                                              "max_abs_dlam"])
         agreement = agreement.sort_values(sort, ascending=[True] * 5 + [False], na_position="last")
         agreement = agreement.drop(columns=["set"]).reset_index(drop=True)
