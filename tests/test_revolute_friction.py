@@ -148,7 +148,7 @@ def hand_rk4(t_grid, h):
     """Classical RK4 with step h and the plain sgn at every stage, sampled at t_grid (multiples of h)."""
     def f(y):
         return np.array([y[1], hand_accel(y[0], y[1], float(np.sign(y[1])))[0]])
-    y, out, t = np.array(START, dtype=float), [], 0.0
+    y, out = np.array(START, dtype=float), []
     every = int(round((t_grid[1] - t_grid[0]) / h))
     n = int(round(t_grid[-1] / h))
     out.append(y.copy())
