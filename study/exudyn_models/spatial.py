@@ -289,7 +289,8 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
         "newton_tolerance": settings.NEWTON_TOLERANCE,
         "spectral_radius": settings.SPECTRAL_RADIUS if solver == "index3" else None,
         "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
-        "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, "versions": package_versions(),
+        "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, **eom.redundancy_note(),
+        "versions": package_versions(),
     }
     return SimulationResult(t=t, q=q, qd=qd, qdd=qdd, lam=lam, phi=np.array([eom.phi(x) for x in q]),
                             phidot=np.array([eom.phi_q(x) @ v for x, v in zip(q, qd)]), energies=energies,
@@ -308,7 +309,15 @@ def run_spatial(d: SpatialDescription, eom: EquationsOfMotion, q0, qd0, t_end: f
     grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS)
     q0 = np.asarray(q0, dtype=float)
     b = build(d, q0, qd0)
-    simulation = settings.simulation_settings(grid, solver, 0)   # loads of time only: no load Jacobian
-    stats = {"configuration": "python", "linear_solver": "dense", "newton_tolerance": settings.NEWTON_TOLERANCE}
+    # loads of time only: no load Jacobian. Redundant rows (eom.redundant_rows): Newton's singular matrix factorized
+    # with the dependent equations left out (linearSolver.ignoreSingularJacobian) by Eigen's dense full-pivoting LU,
+    # as in Exudyn's TestModels/bricardMechanism.py; Exudyn's own dense inverse (EXUdense) stops at the first step of
+    # Bricard's mechanism with the flag set ('reduction of step size reached minimum step size')
+    ignore = eom.redundant_rows > 0
+    simulation = settings.simulation_settings(grid, solver, 0, ignore_singular=ignore)
+    if ignore:
+        simulation.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    stats = {"configuration": "python", "linear_solver": "eigen_dense" if ignore else "dense",
+             "newton_tolerance": settings.NEWTON_TOLERANCE, "ignore_singular_jacobian": ignore}
     stats.update(solve.solve(b.model, simulation, solver))
     return result(b, eom, q0, grid, solver, stats)

@@ -115,6 +115,8 @@ class SpatialDescription:
         self.joints: list[Spherical | Revolute | FixedJoint | Prismatic | Cylindrical | Universal | Distance] = []
         self.loads: list[PointLoad | TorqueLoad] = []
         self.gravity_vector = np.zeros(3)
+        self.redundant = 0
+        self.redundancy_reason = ""
         self._names: set[str] = set()
 
     def _claim(self, kind: str, name: str) -> None:
@@ -213,6 +215,16 @@ class SpatialDescription:
             raise SpatialDescriptionError(f"length of joint {name!r} = {length!r} must be > 0 (a zero distance is a "
                                           f"spherical joint, whose row |d| - 0 has no gradient)")
         self.joints.append(Distance(name, *pair, length=float(value)))
+
+    def redundant_rows(self, count: int, reason: str) -> None:
+        """Declare ``count`` joint rows dependent at every configuration (Bricard's linkage: 1; ``reason`` says why):
+        rank(Phi_q) = r - count, checked at the initial state (:func:`study.spatial.initial.initial_state`)."""
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise SpatialDescriptionError(f"{self.name}: redundant_rows count = {count!r} must be an integer >= 1")
+        if not isinstance(reason, str) or not reason.strip():
+            raise SpatialDescriptionError(f"{self.name}: redundant_rows needs its reason (why the rows are dependent "
+                                          f"everywhere), got {reason!r}")
+        self.redundant, self.redundancy_reason = count, reason
 
     def gravity(self, g: Sequence[float]) -> None:
         """Uniform gravity, the global acceleration vector g (a potential m g . r per body)."""

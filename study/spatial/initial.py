@@ -87,6 +87,26 @@ def _newton(eom: EquationsOfMotion, q: np.ndarray) -> np.ndarray:
                                   f"{tol:g})")
 
 
+def _check_rank(d: SpatialDescription, eom: EquationsOfMotion, q: np.ndarray) -> None:
+    """rank(Phi_q) at the assembled start must be r - the declared redundant rows (``singular_ratio`` of the largest
+    singular value decides): fewer is a locking or singular pose, or dependent rows the description does not
+    declare; more, rows declared redundant that are not."""
+    if not eom.n_constraints:
+        return
+    s = np.linalg.svd(eom.phi_q(q), compute_uv=False)
+    rank = int(np.sum(s >= tolerance("singular_ratio") * s[0]))
+    expected = eom.n_constraints - d.redundant
+    if rank != expected:
+        declared = f"{d.redundant} declared redundant ({d.redundancy_reason})" if d.redundant else "none declared"
+        raise SpatialDescriptionError(
+            f"{eom.name}: Phi_q at the start has rank {rank} of {eom.n_constraints} rows, {declared}: expected "
+            f"{expected}; smallest singular values {np.sort(s)[:d.redundant + 2].tolist()} (relative threshold "
+            f"{tolerance('singular_ratio'):g}, singular_ratio): " + ("a locking or singular pose, or dependent rows "
+                                                                 "not declared (SpatialDescription.redundant_rows)"
+                                                                 if rank < expected else "the declared rows are "
+                                                                 "not dependent here"))
+
+
 def _velocities(eom: EquationsOfMotion, q: np.ndarray, v: list, w: list, frame: str) -> np.ndarray:
     qd = np.concatenate([np.concatenate([v_i, euler_rates(q[7 * i + 3:7 * i + 7], w_i, frame)])
                          for i, (v_i, w_i) in enumerate(zip(v, w))])
@@ -123,4 +143,5 @@ def initial_state(d: SpatialDescription, eom: EquationsOfMotion, positions: Mapp
     q, v, w = _start(d, positions, given["orientations"], given["angular_velocities"], given["velocities"])
     _check_universal(d, q)
     q = _newton(eom, q)
+    _check_rank(d, eom, q)
     return q, _velocities(eom, q, v, w, frame)
