@@ -59,7 +59,8 @@ def test_the_jacobian_has_one_redundant_row_and_the_start_is_assembled(start):
 def test_an_undeclared_or_wrong_redundancy_and_a_full_rank_solver_are_refused(start):
     d = bricard()
     d.redundant = 0
-    with pytest.raises(ValueError, match=r"n_constraints = 35 must be .* r - redundant_rows \(0\) < n_coordinates = 35"):
+    with pytest.raises(ValueError, match=r"n_constraints = 35 must be .* r - redundant_rows \(0\) < "
+                                         r"n_coordinates = 35"):
         spatial_equations(d)
     d = bricard()
     d.redundant_rows(2, "two, wrongly")

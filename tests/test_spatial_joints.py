@@ -164,6 +164,7 @@ def test_bad_joint_input_is_refused_by_name():
     with pytest.raises(SpatialDescriptionError, match="length of joint 'rod' = 0.0 must be > 0"):
         d.distance("rod", ("output", "end"), (GROUND, (0.0, 0.0, 0.0)), 0.0)
     with pytest.raises(SpatialDescriptionError, match="orientation of joint 'slide' = .* is not a rotation matrix"):
-        d.prismatic("slide", ("output", "end"), (GROUND, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0)), [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
+        d.prismatic("slide", ("output", "end"), (GROUND, (0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
+                    [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
     with pytest.raises(SpatialDescriptionError, match="joint 'tube': body 'input' has no axis 'bore'"):
         d.cylindrical("tube", ("output", "end", "fork"), ("input", "yoke", "bore"))

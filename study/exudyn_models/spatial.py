@@ -49,8 +49,8 @@ from study.exudyn_models.building import OVT, Model
 from study.model.eom import EquationsOfMotion
 from study.results import SimulationResult, package_versions
 from study.spatial.description import SpatialDescription, spatial_only
-from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute, Spherical,
-                                    Universal)
+from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute,
+                                    Spherical, Universal)
 from study.spatial.joints import joint_frames
 
 Array = np.ndarray

@@ -11,8 +11,8 @@ import sympy as sp
 
 from study.model.elements import GROUND, DescriptionError
 
-__all__ = ["GROUND", "AxisPair", "Cylindrical", "Distance", "FixedJoint", "PointLoad", "Prismatic", "Revolute", "RigidBody",
-           "SpatialDescriptionError", "Spherical", "TorqueLoad", "Universal"]
+__all__ = ["GROUND", "AxisPair", "Cylindrical", "Distance", "FixedJoint", "PointLoad", "Prismatic", "Revolute",
+           "RigidBody", "SpatialDescriptionError", "Spherical", "TorqueLoad", "Universal"]
 
 Vector = tuple[float, float, float]
 
