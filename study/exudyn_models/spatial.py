@@ -9,11 +9,14 @@ Exudyn's coordinates and the norm rows' multipliers (below).
   inertia tensor at the centre of mass), and gravity as LoadMassProportional.
 * spherical: JointSpherical, marker 0 at body b's point, marker 1 at body a's point (Exudyn's rows p_m1 - p_m0 are
   the description's r_a + A_a s_a - r_b - A_b s_b).
-* revolute: JointGeneric with the rotation about the joint frame's z axis free; marker 0 on body b with the frame
-  (f_b, g_b, h_b), marker 1 on body a with (f, g, h_a) (:func:`study.spatial.joints.perpendicular_pair`), so that
-  Exudyn's two rotation rows are the description's (A_a f)^T (A_b h_b) and (A_a g)^T (A_b h_b).
-* fixed: JointGeneric with every axis locked; marker 0 on body b with the frame C, marker 1 on body a with the
-  identity: the joint frames coincide when A_a = A_b C, the description's lock.
+* revolute, cylindrical, universal, fixed, prismatic: JointGeneric, marker 0 on body b with the joint frame R_b,
+  marker 1 on body a with R_a (:func:`study.spatial.joints.joint_frames`), the kind's axes locked (GENERIC_AXES).
+  Exudyn's rows are then the description's (:mod:`study.spatial.joints`): all three translations locked, the gap
+  in global components; two (cylindrical, prismatic), its components along marker 0's x and y columns; the
+  revolute's rotation rows (A_b h_b)^T (A_a f_a), (A_b h_b)^T (A_a g_a); the universal's (A_b h_b)^T (A_a h_a); all
+  three rotations locked, (A_b R_b e_2)^T (A_a R_a e_1), (A_b R_b e_2)^T (A_a R_a e_0), (A_b R_b e_0)^T (A_a R_a
+  e_1), two of them the description's lock rows with the vectors swapped (sign -1 in JOINT_ROWS).
+* distance: ConnectorDistance, marker 0 at body b's point, marker 1 at body a's (the row |p_m1 - p_m0| - L).
 * point force: LoadForceVector at a MarkerBodyPosition (global components); torque: LoadTorqueVector at a
   MarkerBodyRigid, ``bodyFixed`` for the 'body' frame. A law of time is a Python load user function.
 
@@ -37,8 +40,8 @@ import exudyn as exu
 import numpy as np
 import sympy as sp
 from exudyn.itemInterface import (LoadForceVector, LoadMassProportional, LoadTorqueVector, MarkerBodyMass,
-                                  MarkerBodyPosition, MarkerBodyRigid, NodeRigidBodyEP, ObjectJointGeneric,
-                                  ObjectJointSpherical, ObjectRigidBody, SensorBody, SensorNode)
+                                  MarkerBodyPosition, MarkerBodyRigid, NodeRigidBodyEP, ObjectConnectorDistance,
+                                  ObjectJointGeneric, ObjectJointSpherical, ObjectRigidBody, SensorBody, SensorNode)
 
 import study.exudyn_models.settings as settings
 import study.exudyn_models.solve as solve
@@ -46,8 +49,9 @@ from study.exudyn_models.building import OVT, Model
 from study.model.eom import EquationsOfMotion
 from study.results import SimulationResult, package_versions
 from study.spatial.description import SpatialDescription, spatial_only
-from study.spatial.elements import GROUND, FixedJoint, PointLoad, Revolute, Spherical
-from study.spatial.joints import perpendicular_pair
+from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute,
+                                    Spherical, Universal)
+from study.spatial.joints import joint_frames
 
 Array = np.ndarray
 
@@ -57,6 +61,10 @@ JOINT_ROWS = {
     Spherical: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0)),
     Revolute: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("f", 3, 1.0), ("g", 4, 1.0)),
     FixedJoint: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("rx", 5, -1.0), ("ry", 3, 1.0), ("rz", 4, -1.0)),
+    Prismatic: (("tx", 0, 1.0), ("ty", 1, 1.0), ("rx", 5, -1.0), ("ry", 3, 1.0), ("rz", 4, -1.0)),
+    Cylindrical: (("tx", 0, 1.0), ("ty", 1, 1.0), ("f", 3, 1.0), ("g", 4, 1.0)),
+    Universal: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("h", 3, 1.0)),
+    Distance: (("length", 0, 1.0),),
 }
 NORM_NOTE = ("the norm rows' multipliers are the in-house convention's (Exudyn's Euler-parameter multiplier belongs "
              "to its own mass matrix): the p-block's component along p of Q - M qdd - Phi_q,joints^T lam on Exudyn's "
@@ -117,29 +125,32 @@ def add_spherical(b: SpatialBuilt, j: Spherical) -> int:
                                                                      b.marker(j.body_a, j.a)]))
 
 
-def _axis(b: SpatialBuilt, body: str, axis) -> Array:
-    return np.array(axis if body == GROUND else b.d.bodies[body].axes[axis], dtype=float)
+def add_distance(b: SpatialBuilt, j: Distance) -> int:
+    return b.model.mbs.AddObject(ObjectConnectorDistance(markerNumbers=[b.marker(j.body_b, j.b),
+                                                                        b.marker(j.body_a, j.a)], distance=j.length))
 
 
-def add_revolute(b: SpatialBuilt, j: Revolute) -> int:
-    """The joint frames (f_b, g_b, h_b) on body b and (f, g, h_a) on body a; the rotation about z is free."""
-    frames = []
-    for body, axis in ((j.body_b, j.axis_b), (j.body_a, j.axis_a)):
-        h = _axis(b, body, axis)
-        frames.append(np.column_stack([*perpendicular_pair(h), h]))
+#: joint kind -> ObjectJointGeneric's constrainedAxes (translations x, y, z, rotations about x, y, z of marker 0's
+#: frame); the markers' frames are :func:`study.spatial.joints.joint_frames`'
+GENERIC_AXES = {
+    Revolute: [1, 1, 1, 1, 1, 0],
+    Cylindrical: [1, 1, 0, 1, 1, 0],
+    Universal: [1, 1, 1, 1, 0, 0],
+    FixedJoint: [1, 1, 1, 1, 1, 1],
+    Prismatic: [1, 1, 0, 1, 1, 1],
+}
+
+
+def add_generic(b: SpatialBuilt, j) -> int:
+    """A JointGeneric: marker 0 on body b with the frame R_b, marker 1 on body a with R_a, the kind's locked axes."""
+    frame_a, frame_b = joint_frames(b.d, j)
     return b.model.mbs.AddObject(ObjectJointGeneric(
-        markerNumbers=[b.marker(j.body_b, j.b, frames[0]), b.marker(j.body_a, j.a, frames[1])],
-        constrainedAxes=[1, 1, 1, 1, 1, 0]))
-
-
-def add_fixed(b: SpatialBuilt, j: FixedJoint) -> int:
-    return b.model.mbs.AddObject(ObjectJointGeneric(
-        markerNumbers=[b.marker(j.body_b, j.b, np.asarray(j.orientation, dtype=float)), b.marker(j.body_a, j.a)],
-        constrainedAxes=[1, 1, 1, 1, 1, 1]))
+        markerNumbers=[b.marker(j.body_b, j.b, frame_b), b.marker(j.body_a, j.a, frame_a)],
+        constrainedAxes=GENERIC_AXES[type(j)]))
 
 
 #: joint class -> its handler
-JOINTS = {Spherical: add_spherical, Revolute: add_revolute, FixedJoint: add_fixed}
+JOINTS = {Spherical: add_spherical, Distance: add_distance, **{kind: add_generic for kind in GENERIC_AXES}}
 
 
 def add_joint(b: SpatialBuilt, j) -> None:
@@ -278,7 +289,8 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
         "newton_tolerance": settings.NEWTON_TOLERANCE,
         "spectral_radius": settings.SPECTRAL_RADIUS if solver == "index3" else None,
         "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
-        "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, "versions": package_versions(),
+        "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, **eom.redundancy_note(),
+        "versions": package_versions(),
     }
     return SimulationResult(t=t, q=q, qd=qd, qdd=qdd, lam=lam, phi=np.array([eom.phi(x) for x in q]),
                             phidot=np.array([eom.phi_q(x) @ v for x, v in zip(q, qd)]), energies=energies,
@@ -297,7 +309,15 @@ def run_spatial(d: SpatialDescription, eom: EquationsOfMotion, q0, qd0, t_end: f
     grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS)
     q0 = np.asarray(q0, dtype=float)
     b = build(d, q0, qd0)
-    simulation = settings.simulation_settings(grid, solver, 0)   # loads of time only: no load Jacobian
-    stats = {"configuration": "python", "linear_solver": "dense", "newton_tolerance": settings.NEWTON_TOLERANCE}
+    # loads of time only: no load Jacobian. Redundant rows (eom.redundant_rows): Newton's singular matrix factorized
+    # with the dependent equations left out (linearSolver.ignoreSingularJacobian) by Eigen's dense full-pivoting LU,
+    # as in Exudyn's TestModels/bricardMechanism.py; Exudyn's own dense inverse (EXUdense) stops at the first step of
+    # Bricard's mechanism with the flag set ('reduction of step size reached minimum step size')
+    ignore = eom.redundant_rows > 0
+    simulation = settings.simulation_settings(grid, solver, 0, ignore_singular=ignore)
+    if ignore:
+        simulation.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    stats = {"configuration": "python", "linear_solver": "eigen_dense" if ignore else "dense",
+             "newton_tolerance": settings.NEWTON_TOLERANCE, "ignore_singular_jacobian": ignore}
     stats.update(solve.solve(b.model, simulation, solver))
     return result(b, eom, q0, grid, solver, stats)

@@ -124,6 +124,9 @@ class EquationsOfMotion:
     indicators : callable (t, q, qd) -> (k,), optional
         Switching functions of discontinuous loads. Between two zero crossings the loads use a
         frozen ``mode`` (tuple of +-1, the indicators' signs), so an integrator can locate switches.
+    redundant_rows : int
+        How many of the r rows are dependent at every configuration (Bricard's linkage: 1), so that
+        rank(Phi_q) = r - redundant_rows < m; 0 (the default) for independent rows, r < m.
     """
 
     n_coordinates: int
@@ -145,6 +148,7 @@ class EquationsOfMotion:
     parameter_hash: str = ""
     points: Mapping[str, Callable[[Array], Array]] = field(default_factory=dict)
     kinematics: Mapping[str, Callable[..., Array]] = field(default_factory=dict)
+    redundant_rows: int = 0
 
     def __post_init__(self) -> None:
         for key in ("n_coordinates", "n_constraints"):   # numpy's integers too, kept as Python ints
@@ -155,8 +159,12 @@ class EquationsOfMotion:
         problems = []
         if not isinstance(m, int) or m < 1:
             problems.append(f"n_coordinates = {m!r} must be a positive integer")
-        if not isinstance(r, int) or not 0 <= r < (m if isinstance(m, int) else 1):
-            problems.append(f"n_constraints = {r!r} must be an integer with 0 <= r < n_coordinates = {m!r}")
+        k = self.redundant_rows
+        if not isinstance(k, int) or not 0 <= k <= (r if isinstance(r, int) else 0):
+            problems.append(f"redundant_rows = {k!r} must be an integer with 0 <= redundant_rows <= r = {r!r}")
+        elif not isinstance(r, int) or not 0 <= r - k < (m if isinstance(m, int) else 1):
+            problems.append(f"n_constraints = {r!r} must be an integer with 0 <= r - redundant_rows ({k}) < "
+                            f"n_coordinates = {m!r}")
         for key in ("mass", "forces", "phi", "phi_q", "gamma"):
             if not callable(getattr(self, key)):
                 problems.append(f"{key} must be callable, got {type(getattr(self, key)).__name__}")
@@ -179,8 +187,21 @@ class EquationsOfMotion:
 
     @property
     def dof(self) -> int:
-        """Degrees of freedom n = m - r."""
-        return self.n_coordinates - self.n_constraints
+        """Degrees of freedom n = m - r + redundant_rows."""
+        return self.n_coordinates - self.n_constraints + self.redundant_rows
+
+    def redundancy_note(self) -> dict:
+        """Result metadata of redundant rows (none for independent rows): their count and why the multipliers are
+        not unique."""
+        if not self.redundant_rows:
+            return {}
+        return {"redundant_rows": self.redundant_rows,
+                "reactions_unique": False,
+                "reactions_note": f"{self.redundant_rows} of the {self.n_constraints} constraint rows are dependent "
+                                  f"at every configuration: any lam + z with Phi_q^T z = 0 gives the same motion; the "
+                                  f"stored lam is the acceleration solver's (augmented_lagrangian, from lam = 0: the "
+                                  f"minimum-norm one, up to the share of the constraints' drift); only Phi_q^T lam, "
+                                  f"the joints' generalized force, is unique"}
 
     def kinetic_energy(self, q: Array, qd: Array) -> float:
         """T = 1/2 qd^T M(q) qd."""

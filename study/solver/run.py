@@ -76,5 +76,6 @@ def run_metadata(eom: EquationsOfMotion, ps, *, integrator: str, rtol: float, at
         "t_end": float(t_end),
         **stabilization.settings(),
         **(law.settings() if law is not None else {"friction": None}),
+        **eom.redundancy_note(),
         "versions": package_versions(),
     }

@@ -5,7 +5,8 @@
   value checked as it enters (:class:`SpatialDescriptionError`);
 * :mod:`~study.spatial.joints`, :mod:`~study.spatial.derive`: the symbolic equations in r (3) and p (4) per body;
 * :mod:`~study.spatial.equations`: those equations as the solver's EquationsOfMotion;
-* :mod:`~study.spatial.initial`: the consistent initial state from angular velocities per body.
+* :mod:`~study.spatial.initial`: the consistent initial state from angular velocities per body;
+* :mod:`~study.spatial.bricard`: Bricard's mechanism (IFToMM A04), rows redundant at every configuration.
 """
 
 from study.spatial.description import SpatialDescription

@@ -20,8 +20,8 @@ import numpy as np
 import sympy as sp
 
 from study.reference_data import tolerance
-from study.spatial.elements import (GROUND, FixedJoint, PointLoad, Revolute, RigidBody, SpatialDescriptionError,
-                                    Spherical, TorqueLoad)
+from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute,
+                                    RigidBody, SpatialDescriptionError, Spherical, TorqueLoad, Universal)
 
 FRAMES = ("global", "body")
 
@@ -112,9 +112,11 @@ class SpatialDescription:
         self.label = label or name
         self.t = sp.Symbol("t", real=True)
         self.bodies: dict[str, RigidBody] = {}
-        self.joints: list[Spherical | Revolute | FixedJoint] = []
+        self.joints: list[Spherical | Revolute | FixedJoint | Prismatic | Cylindrical | Universal | Distance] = []
         self.loads: list[PointLoad | TorqueLoad] = []
         self.gravity_vector = np.zeros(3)
+        self.redundant = 0
+        self.redundancy_reason = ""
         self._names: set[str] = set()
 
     def _claim(self, kind: str, name: str) -> None:
@@ -167,21 +169,62 @@ class SpatialDescription:
         """Point a[1] of body a[0] coincides with point b[1] of body b[0] (either body may be GROUND)."""
         self.joints.append(Spherical(name, *self._pair(name, a, b)))
 
+    def _axial(self, name: str, a: tuple, b: tuple) -> tuple:
+        """(body_a, point a, axis a, body_b, point b, axis b) of two (body, point, axis) triples."""
+        body_a, pa, body_b, pb = self._pair(name, a[:2], b[:2])
+        return body_a, pa, self._axis(name, body_a, a[2]), body_b, pb, self._axis(name, body_b, b[2])
+
     def revolute(self, name: str, a: tuple[str, Any, Any], b: tuple[str, Any, Any]) -> None:
         """A spherical joint at (body, point) a and b whose axes a[2] and b[2] stay parallel."""
-        body_a, pa, body_b, pb = self._pair(name, a[:2], b[:2])
-        self.joints.append(Revolute(name, body_a, pa, self._axis(name, body_a, a[2]), body_b, pb,
-                                    self._axis(name, body_b, b[2])))
+        self.joints.append(Revolute(name, *self._axial(name, a, b)))
 
-    def fixed(self, name: str, a: tuple[str, Any], b: tuple[str, Any], orientation: Any = None) -> None:
-        """Weld a's body to b's (or to ground): the points coincide, the relative rotation stays ``orientation``."""
-        pair = self._pair(name, a, b)
+    def cylindrical(self, name: str, a: tuple[str, Any, Any], b: tuple[str, Any, Any]) -> None:
+        """Point a[1] stays on the line through b[1] along b[2], and axis a[2] parallel to b[2]."""
+        self.joints.append(Cylindrical(name, *self._axial(name, a, b)))
+
+    def universal(self, name: str, a: tuple[str, Any, Any], b: tuple[str, Any, Any]) -> None:
+        """A spherical joint at (body, point) a and b whose axes a[2] and b[2] stay perpendicular (they must be
+        perpendicular in the initial state, :func:`study.spatial.initial.initial_state`)."""
+        self.joints.append(Universal(name, *self._axial(name, a, b)))
+
+    def _rotation(self, name: str, orientation: Any) -> np.ndarray:
         c = np.eye(3) if orientation is None else np.array(orientation, dtype=float)
         if c.shape != (3, 3) or not np.isfinite(c).all() or \
                 np.max(np.abs(c.T @ c - np.eye(3))) > tolerance("spatial_rotation_orthogonality") or \
                 np.linalg.det(c) <= 0:
             raise SpatialDescriptionError(f"orientation of joint {name!r} = {orientation!r} is not a rotation matrix")
-        self.joints.append(FixedJoint(name, *pair, orientation=c))
+        return c
+
+    def fixed(self, name: str, a: tuple[str, Any], b: tuple[str, Any], orientation: Any = None) -> None:
+        """Weld a's body to b's (or to ground): the points coincide, the relative rotation stays ``orientation``."""
+        pair = self._pair(name, a, b)
+        self.joints.append(FixedJoint(name, *pair, orientation=self._rotation(name, orientation)))
+
+    def prismatic(self, name: str, a: tuple[str, Any], b: tuple[str, Any, Any], orientation: Any = None) -> None:
+        """Point a[1] of body a[0] slides along axis b[2] of body b[0] through b[1]; the relative rotation stays
+        ``orientation`` (C: A_a = A_b C; the identity by default)."""
+        body_a, pa, body_b, pb = self._pair(name, a, b[:2])
+        self.joints.append(Prismatic(name, body_a, pa, body_b, pb, self._axis(name, body_b, b[2]),
+                                     self._rotation(name, orientation)))
+
+    def distance(self, name: str, a: tuple[str, Any], b: tuple[str, Any], length: float) -> None:
+        """Point a[1] of body a[0] stays at ``length`` (> 0) from point b[1] of body b[0]."""
+        pair = self._pair(name, a, b)
+        value = real_vector([length], 1, f"length of joint {name!r}")[0]
+        if not value > 0:
+            raise SpatialDescriptionError(f"length of joint {name!r} = {length!r} must be > 0 (a zero distance is a "
+                                          f"spherical joint, whose row |d| - 0 has no gradient)")
+        self.joints.append(Distance(name, *pair, length=float(value)))
+
+    def redundant_rows(self, count: int, reason: str) -> None:
+        """Declare ``count`` joint rows dependent at every configuration (Bricard's linkage: 1; ``reason`` says why):
+        rank(Phi_q) = r - count, checked at the initial state (:func:`study.spatial.initial.initial_state`)."""
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise SpatialDescriptionError(f"{self.name}: redundant_rows count = {count!r} must be an integer >= 1")
+        if not isinstance(reason, str) or not reason.strip():
+            raise SpatialDescriptionError(f"{self.name}: redundant_rows needs its reason (why the rows are dependent "
+                                          f"everywhere), got {reason!r}")
+        self.redundant, self.redundancy_reason = count, reason
 
     def gravity(self, g: Sequence[float]) -> None:
         """Uniform gravity, the global acceleration vector g (a potential m g . r per body)."""

@@ -11,8 +11,8 @@ import sympy as sp
 
 from study.model.elements import GROUND, DescriptionError
 
-__all__ = ["GROUND", "FixedJoint", "PointLoad", "Revolute", "RigidBody", "SpatialDescriptionError", "Spherical",
-           "TorqueLoad"]
+__all__ = ["GROUND", "AxisPair", "Cylindrical", "Distance", "FixedJoint", "PointLoad", "Prismatic", "Revolute",
+           "RigidBody", "SpatialDescriptionError", "Spherical", "TorqueLoad", "Universal"]
 
 Vector = tuple[float, float, float]
 
@@ -46,9 +46,9 @@ class Spherical:
 
 
 @dataclass(frozen=True)
-class Revolute:
-    """A spherical joint (3 rows) whose two axes stay parallel (2 rows): ``axis_a`` of body_a along ``axis_b`` of
-    body_b (each an axis name, or a global unit 3-tuple on ground)."""
+class AxisPair:
+    """A joint between point ``a`` of body_a and point ``b`` of body_b with an axis on each: ``axis_a`` of body_a,
+    ``axis_b`` of body_b (each an axis name, or a global unit 3-tuple on ground)."""
 
     name: str
     body_a: str
@@ -57,6 +57,10 @@ class Revolute:
     body_b: str
     b: str | Vector
     axis_b: str | Vector
+
+
+class Revolute(AxisPair):
+    """A spherical joint (3 rows) whose two axes stay parallel (2 rows)."""
 
 
 @dataclass(frozen=True)
@@ -70,6 +74,43 @@ class FixedJoint:
     body_b: str
     b: str | Vector
     orientation: np.ndarray
+
+
+@dataclass(frozen=True)
+class Prismatic:
+    """Point ``a`` of body_a slides along ``axis_b`` of body_b through point ``b`` (2 rows) with the relative rotation
+    locked (3 rows) at A_a = A_b C, C = ``orientation`` (as for :class:`FixedJoint`)."""
+
+    name: str
+    body_a: str
+    a: str | Vector
+    body_b: str
+    b: str | Vector
+    axis_b: str | Vector
+    orientation: np.ndarray
+
+
+class Cylindrical(AxisPair):
+    """Point ``a`` of body_a stays on the line through point ``b`` along ``axis_b`` of body_b (2 rows) and ``axis_a``
+    stays parallel to ``axis_b`` (2 rows): sliding along and turning about the common axis are free."""
+
+
+class Universal(AxisPair):
+    """A spherical joint (3 rows) whose two axes (``axis_a`` of body_a, ``axis_b`` of body_b) stay perpendicular
+    (1 row): the cross of a Cardan joint."""
+
+
+@dataclass(frozen=True)
+class Distance:
+    """Point ``a`` of body_a stays at ``length`` (> 0) from point ``b`` of body_b (1 row): a massless rod with
+    spherical ends."""
+
+    name: str
+    body_a: str
+    a: str | Vector
+    body_b: str
+    b: str | Vector
+    length: float
 
 
 @dataclass(frozen=True)

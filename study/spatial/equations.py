@@ -56,5 +56,5 @@ def spatial_equations(d: SpatialDescription, symbolic: SpatialSymbolic | None = 
         gamma=numeric((q, qd), s.gamma, (r,)),
         name=d.name, coordinate_names=s.coordinate_names, constraint_names=s.constraint_names,
         potential_energy=numeric((q,), s.potential, ()), applied_forces=applied_forces,
-        points={name: numeric((q,), x, (3,)) for name, x in s.points.items()},
+        points={name: numeric((q,), x, (3,)) for name, x in s.points.items()}, redundant_rows=d.redundant,
     )

@@ -2,7 +2,8 @@
 velocity.
 
 Positions: each body's Euler parameters must be within ``spatial_euler_norm_start`` (reference/tolerances.toml) of
-unit norm (a larger deviation is not rounding but a wrong value, refused by name); then Newton's method on all
+unit norm (a larger deviation is not rounding but a wrong value, refused by name), and each universal joint's two
+axes perpendicular within ``spatial_universal_perpendicular`` (else refused by name); then Newton's method on all
 constraint rows (the joints' and the norm rows), with the minimum-norm correction, brings q onto Phi(q) = 0.
 Velocities: each body's angular velocity, given in the 'global' or the 'body' frame, sets its Euler-parameter rates
 p_dot = 1/2 E^T omega = 1/2 G^T omega' (:mod:`study.spatial.rotations`); the centres' velocities (given ones as the
@@ -19,8 +20,9 @@ import numpy as np
 from study.model.eom import EquationsOfMotion
 from study.reference_data import tolerance
 from study.spatial.description import FRAMES, SpatialDescription, real_vector, spatial_only
-from study.spatial.elements import SpatialDescriptionError
-from study.spatial.rotations import e_matrix, g_matrix
+from study.spatial.elements import GROUND, SpatialDescriptionError, Universal
+from study.spatial.joints import body_axis
+from study.spatial.rotations import e_matrix, g_matrix, rotation
 
 NEWTON_MAX_ITER = 20
 
@@ -50,6 +52,28 @@ def _start(d: SpatialDescription, positions, orientations, angular_velocities, v
     return np.array(q), v, w
 
 
+def _check_universal(d: SpatialDescription, q: np.ndarray) -> None:
+    """A universal joint's two axes must start perpendicular (within ``spatial_universal_perpendicular``): Newton
+    would otherwise turn the bodies until they are, a start the user did not give."""
+    names = list(d.bodies)
+    for j in d.joints:
+        if not isinstance(j, Universal):
+            continue
+        axes = []
+        for body, axis in ((j.body_a, j.axis_a), (j.body_b, j.axis_b)):
+            h = body_axis(d, body, axis)
+            if body != GROUND:
+                k = 7 * names.index(body) + 3
+                h = np.array(rotation(list(q[k:k + 4] / np.linalg.norm(q[k:k + 4]))).tolist(), dtype=float) @ h
+            axes.append(h)
+        cosine = float(axes[0] @ axes[1])
+        if abs(cosine) > tolerance("spatial_universal_perpendicular"):
+            raise SpatialDescriptionError(
+                f"universal joint {j.name!r}: axis {j.axis_a!r} of {j.body_a!r} and axis {j.axis_b!r} of "
+                f"{j.body_b!r} are not perpendicular at the start (global {axes[0].round(6).tolist()} and "
+                f"{axes[1].round(6).tolist()}, cosine {cosine:.3g}, angle {np.degrees(np.arccos(cosine)):.4g} deg)")
+
+
 def _newton(eom: EquationsOfMotion, q: np.ndarray) -> np.ndarray:
     tol = tolerance("spatial_newton")
     for _ in range(NEWTON_MAX_ITER):
@@ -61,6 +85,26 @@ def _newton(eom: EquationsOfMotion, q: np.ndarray) -> np.ndarray:
     raise SpatialDescriptionError(f"{eom.name}: the initial positions cannot be assembled: after {NEWTON_MAX_ITER} "
                                   f"Newton steps {eom.constraint_names[worst]} = {eom.phi(q)[worst]:.3g} (tolerance "
                                   f"{tol:g})")
+
+
+def _check_rank(d: SpatialDescription, eom: EquationsOfMotion, q: np.ndarray) -> None:
+    """rank(Phi_q) at the assembled start must be r - the declared redundant rows (``singular_ratio`` of the largest
+    singular value decides): fewer is a locking or singular pose, or dependent rows the description does not
+    declare; more, rows declared redundant that are not."""
+    if not eom.n_constraints:
+        return
+    s = np.linalg.svd(eom.phi_q(q), compute_uv=False)
+    rank = int(np.sum(s >= tolerance("singular_ratio") * s[0]))
+    expected = eom.n_constraints - d.redundant
+    if rank != expected:
+        declared = f"{d.redundant} declared redundant ({d.redundancy_reason})" if d.redundant else "none declared"
+        raise SpatialDescriptionError(
+            f"{eom.name}: Phi_q at the start has rank {rank} of {eom.n_constraints} rows, {declared}: expected "
+            f"{expected}; smallest singular values {np.sort(s)[:d.redundant + 2].tolist()} (relative threshold "
+            f"{tolerance('singular_ratio'):g}, singular_ratio): " + ("a locking or singular pose, or dependent rows "
+                                                                 "not declared (SpatialDescription.redundant_rows)"
+                                                                 if rank < expected else "the declared rows are "
+                                                                 "not dependent here"))
 
 
 def _velocities(eom: EquationsOfMotion, q: np.ndarray, v: list, w: list, frame: str) -> np.ndarray:
@@ -97,5 +141,7 @@ def initial_state(d: SpatialDescription, eom: EquationsOfMotion, positions: Mapp
             raise SpatialDescriptionError(f"{what} name bodies {unknown} that {d.name!r} does not have "
                                           f"(bodies: {sorted(d.bodies)})")
     q, v, w = _start(d, positions, given["orientations"], given["angular_velocities"], given["velocities"])
+    _check_universal(d, q)
     q = _newton(eom, q)
+    _check_rank(d, eom, q)
     return q, _velocities(eom, q, v, w, frame)

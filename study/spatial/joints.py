@@ -1,14 +1,23 @@
 """The constraint rows of the spatial joints, in the body coordinates (r, p) of :mod:`study.spatial.derive`.
 
 With A_i = A(p_i) (:func:`study.spatial.rotations.rotation`) and a point s' of body i, its global position is
-r_i + A_i s' (ground: the point's global coordinates, a constant):
+r_i + A_i s' (ground: the point's global coordinates, a constant); d = r_a + A_a s_a' - r_b - A_b s_b' is the gap
+between the joint's two points. A joint with axes has a frame on each body (:func:`joint_frames`: R_a on body a,
+R_b on body b, columns e_0, e_1, e_2; (f, g, h) is :func:`axis_frame` of a unit axis h), the frames Exudyn's markers
+take (:mod:`study.exudyn_models.spatial`):
 
-* spherical: r_a + A_a s_a' - r_b - A_b s_b' = 0                       (3 rows, ``<name>_x``, ``_y``, ``_z``)
-* revolute: the spherical rows and (A_a f)^T (A_b h_b) = (A_a g)^T (A_b h_b) = 0, f, g two unit vectors
-  perpendicular to body a's axis h_a (so h_a stays parallel to h_b; Nikravesh 1988, sec. 11.3) (``_f``, ``_g``)
-* fixed: the spherical rows and (A_a x)^T (A_b C y) = (A_a y)^T (A_b C z) = (A_a z)^T (A_b C x) = 0 with x, y, z the
-  unit vectors and C the locked relative orientation: three rows that vanish at A_a = A_b C and are independent
-  there (their Jacobian is the relative rotation's) (``_rx``, ``_ry``, ``_rz``)
+* spherical: d = 0                                                  (3 rows, ``<name>_x``, ``_y``, ``_z``)
+* revolute: d = 0 and (A_a f_a)^T (A_b h_b) = (A_a g_a)^T (A_b h_b) = 0: body a's axis h_a stays parallel to
+  h_b (Nikravesh 1988, sec. 11.3)                                   (``_x``, ``_y``, ``_z``, ``_f``, ``_g``)
+* cylindrical: (A_b f_b)^T d = (A_b g_b)^T d = 0 (point a on body b's axis line) and the revolute's two parallel
+  rows                                                              (``_tx``, ``_ty``, ``_f``, ``_g``)
+* universal: d = 0 and (A_a h_a)^T (A_b h_b) = 0                      (``_x``, ``_y``, ``_z``, ``_h``)
+* fixed: d = 0 and the lock (A_a R_a e_k)^T (A_b R_b e_n) = 0 for (k, n) = (0, 1), (1, 2), (2, 0) with R_a = I,
+  R_b = C the locked relative orientation: three rows that vanish at A_a = A_b C and are independent there (their
+  Jacobian is the relative rotation's)                               (``_x``, ``_y``, ``_z``, ``_rx``, ``_ry``, ``_rz``)
+* prismatic: (A_b f_b)^T d = (A_b g_b)^T d = 0 and the lock with R_b = (f_b, g_b, h_b), R_a = C^T R_b (the frames
+  coincide at A_a = A_b C)                                          (``_tx``, ``_ty``, ``_rx``, ``_ry``, ``_rz``)
+* distance: |d| - L = 0                                              (``_length``)
 """
 
 from __future__ import annotations
@@ -17,7 +26,7 @@ import numpy as np
 import sympy as sp
 
 from study.spatial.description import SpatialDescription
-from study.spatial.elements import GROUND, FixedJoint, Revolute
+from study.spatial.elements import GROUND, Cylindrical, Distance, FixedJoint, Prismatic, Revolute, Spherical, Universal
 from study.spatial.rotations import rotation
 
 
@@ -41,10 +50,6 @@ class BodyFrames:
         v = sp.Matrix([sp.Float(x) for x in local])
         return v if body == GROUND else self.rotation[body] * v
 
-    def axis(self, body: str, axis) -> np.ndarray:
-        """The body-frame components of a named axis (a ground axis: its global components)."""
-        return np.array(axis if body == GROUND else self.d.bodies[body].axes[axis], dtype=float)
-
 
 def perpendicular_pair(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors f, g with (f, g, h) orthonormal, for a unit h."""
@@ -54,21 +59,63 @@ def perpendicular_pair(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return f, np.cross(h, f)
 
 
+def axis_frame(h: np.ndarray) -> np.ndarray:
+    """The rotation matrix with columns (f, g, h) (:func:`perpendicular_pair`): the axis h is its z column."""
+    return np.column_stack([*perpendicular_pair(h), h])
+
+
+def body_axis(d: SpatialDescription, body: str, axis) -> np.ndarray:
+    """The body-frame components of a named axis (a ground axis: its global components)."""
+    return np.array(axis if body == GROUND else d.bodies[body].axes[axis], dtype=float)
+
+
+def joint_frames(d: SpatialDescription, j) -> tuple[np.ndarray, np.ndarray] | None:
+    """(R_a, R_b): the joint's frame on body a and on body b (body-frame columns), None for a joint without axes.
+
+    Universal: R_b = (g_b, h_b, f_b), h_b its y column (Exudyn's universal locks its marker 0's y column against its
+    marker 1's z column)."""
+    if isinstance(j, (Spherical, Distance)):
+        return None
+    if isinstance(j, FixedJoint):
+        return np.eye(3), np.asarray(j.orientation, dtype=float)
+    frame_b = axis_frame(body_axis(d, j.body_b, j.axis_b))
+    if isinstance(j, Prismatic):
+        return np.asarray(j.orientation, dtype=float).T @ frame_b, frame_b
+    frame_a = axis_frame(body_axis(d, j.body_a, j.axis_a))
+    if isinstance(j, Universal):
+        return frame_a, frame_b[:, [1, 2, 0]]
+    return frame_a, frame_b
+
+
+def _dot(u: sp.Matrix, v: sp.Matrix) -> sp.Expr:
+    return (u.T * v)[0]
+
+
+def _rows(d: SpatialDescription, frames: BodyFrames, j) -> list[tuple[str, sp.Expr]]:
+    """(suffix, row) of one joint (module docstring)."""
+    gap = frames.point(j.body_a, j.a) - frames.point(j.body_b, j.b)
+    if isinstance(j, Distance):
+        return [("length", sp.sqrt(_dot(gap, gap)) - j.length)]
+    spherical = [(c, gap[k]) for k, c in enumerate("xyz")]
+    if isinstance(j, Spherical):
+        return spherical
+    r_a, r_b = joint_frames(d, j)
+    a = [frames.vector(j.body_a, r_a[:, k]) for k in range(3)]
+    b = [frames.vector(j.body_b, r_b[:, k]) for k in range(3)]
+    across = [("tx", _dot(b[0], gap)), ("ty", _dot(b[1], gap))]
+    parallel = [("f", _dot(a[0], b[2])), ("g", _dot(a[1], b[2]))]
+    lock = [(f"r{c}", _dot(a[k], b[n])) for c, (k, n) in zip("xyz", ((0, 1), (1, 2), (2, 0)))]
+    perpendicular = [("h", _dot(a[2], b[1]))]
+    return {Revolute: spherical + parallel, Cylindrical: across + parallel, Universal: spherical + perpendicular,
+            FixedJoint: spherical + lock, Prismatic: across + lock}[type(j)]
+
+
 def joint_rows(d: SpatialDescription, frames: BodyFrames) -> tuple[list[sp.Expr], list[str]]:
     """Every joint's constraint rows and their names, in the description's order."""
     rows, names = [], []
     for j in d.joints:
-        gap = frames.point(j.body_a, j.a) - frames.point(j.body_b, j.b)
-        rows += list(gap)
-        names += [f"{j.name}_{c}" for c in "xyz"]
-        if isinstance(j, Revolute):
-            h_b = frames.vector(j.body_b, frames.axis(j.body_b, j.axis_b))
-            for label, v in zip("fg", perpendicular_pair(frames.axis(j.body_a, j.axis_a))):
-                rows.append((frames.vector(j.body_a, v).T * h_b)[0])
-                names.append(f"{j.name}_{label}")
-        elif isinstance(j, FixedJoint):
-            unit = np.eye(3)
-            for label, (k, n) in zip(("rx", "ry", "rz"), ((0, 1), (1, 2), (2, 0))):
-                rows.append((frames.vector(j.body_a, unit[k]).T * frames.vector(j.body_b, j.orientation @ unit[n]))[0])
-                names.append(f"{j.name}_{label}")
+        for suffix, row in _rows(d, frames, j):
+            rows.append(row)
+            names.append(f"{j.name}_{suffix}")
     return rows, names
+
