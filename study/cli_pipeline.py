@@ -142,11 +142,10 @@ def _stop(process: subprocess.Popen) -> None:
 
 
 def _evaluation_us() -> float:
-    """µs of one compiled quick-return acceleration evaluation (the benchmark's acceleration_evaluation row), timed
-    now: the pace of this host, for reading the stages' wall times."""
-    from study.bench.evaluations import eval_cost_us
+    """This host's pace (:func:`study.bench.evaluations.pace_us`), for reading the stages' wall times."""
+    from study.bench.evaluations import pace_us
 
-    return eval_cost_us("quick_return", "smooth_cutting", {}, 5, 20000)
+    return pace_us()
 
 
 def verify(args: argparse.Namespace) -> int:

@@ -7,6 +7,11 @@ it needs (sympy derivation, numba kernels); warm: a second child on the same fol
 wall time seen from here and its CPU time (user + system, from its resource usage): on a shared machine the wall
 time varies with the load, the CPU time much less. Each is repeated (``repeats``, a fresh cold folder each time)
 and every repeat is a row, so the spread shows. These are benchmark numbers, never a test's bound.
+
+A host's speed is read from its pace, the µs of one compiled quick-return evaluation that ``make reproduce`` prints
+(:func:`study.bench.evaluations.pace_us`): every row carries the pace of the host it was measured on and its CPU
+seconds scaled to a host of pace 1 µs (``cpu_s / pace_us``), so that numbers from hosts of different speed compare
+(a host 1.5 times slower per evaluation is taken as 1.5 times slower to start).
 """
 
 from __future__ import annotations
@@ -24,15 +29,15 @@ import pandas as pd
 from study.bench.harness import log
 
 T_END = 1.0   # [s] simulated: the run itself takes a few milliseconds; the rest is start-up and compilation
-EXUDYN = ("from study.exudyn_models import run; from study.params import load_parameters; "
-          f"run(load_parameters('quick_return', 'seed'), {T_END}, 1e-3)")
 
 
-def commands(out: Path) -> dict[str, list[str]]:
-    """The child process of each path (arguments after the interpreter)."""
-    cli = ["-m", "study", "simulate", "quick_return", "--t-end", str(T_END), "--out", str(out)]
+def commands(out: Path, t_end: float = T_END) -> dict[str, list[str]]:
+    """The child process of each path (arguments after the interpreter), ``t_end`` [s] simulated."""
+    cli = ["-m", "study", "simulate", "quick_return", "--t-end", str(t_end), "--out", str(out)]
+    exudyn = ("from study.exudyn_models import run; from study.params import load_parameters; "
+              f"run(load_parameters('quick_return', 'seed'), {t_end}, 1e-3)")
     return {"reference": [*cli, "--backend", "reference"], "compiled": [*cli, "--backend", "compiled"],
-            "exudyn": ["-c", EXUDYN]}
+            "exudyn": ["-c", exudyn]}
 
 
 def child(argv: list[str], cache: Path) -> tuple[float, float]:
@@ -47,17 +52,26 @@ def child(argv: list[str], cache: Path) -> tuple[float, float]:
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def compile_time(repeats: int = 2, paths: tuple[str, ...] = ("reference", "compiled", "exudyn")) -> pd.DataFrame:
-    """One row per path, cache state (cold, warm) and repeat: the first result's wall and CPU seconds."""
+def compile_time(repeats: int = 2, paths: tuple[str, ...] = ("reference", "compiled", "exudyn"),
+                 pace: float | None = None, t_end: float = T_END) -> pd.DataFrame:
+    """One row per path, cache state (cold, warm) and repeat: the first result's wall and CPU seconds, this host's
+    pace [µs per evaluation] (``pace``, else measured here by :func:`study.bench.evaluations.pace_us`) and the CPU
+    scaled to a pace of 1 µs."""
+    if pace is None:
+        from study.bench.evaluations import pace_us
+
+        pace = pace_us()
     rows = []
     for repeat in range(repeats):
         with tempfile.TemporaryDirectory(prefix="study_compile_time_") as tmp:
             for path in paths:
-                argv = commands(Path(tmp) / f"{path}_result")[path]
+                argv = commands(Path(tmp) / f"{path}_result", t_end)[path]
                 cache = Path(tmp) / f"{path}_cache"
                 for state in ("cold", "warm"):
                     wall, cpu = child(argv, cache)
                     rows.append({"path": path, "cache": state, "mechanism": "quick_return", "repeat": repeat,
-                                 "first_call_wall_s": wall, "cpu_s": cpu})
-                    log(f"compile: {path} path, {state} cache, repeat {repeat}: {wall:.1f} s wall, {cpu:.1f} s CPU")
+                                 "first_call_wall_s": wall, "cpu_s": cpu, "pace_us": pace,
+                                 "cpu_s_at_pace_1us": cpu / pace})
+                    log(f"compile: {path} path, {state} cache, repeat {repeat}: {wall:.1f} s wall, {cpu:.1f} s CPU "
+                        f"({cpu / pace:.1f} s at a pace of 1 µs; this host's: {pace:.3g} µs)")
     return pd.DataFrame(rows)

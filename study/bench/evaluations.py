@@ -77,3 +77,9 @@ def eval_cost_us(mech: str, variant: str, extra: dict, repeats: int, n_calls: in
         frontend.accelerations(s, 0.0, st.q, st.qd, mode, repeat=n_calls)
         return (time.process_time() - t0) / n_calls * 1e6, None
     return median_cpu(fn, repeats)[0]
+
+
+def pace_us() -> float:
+    """This host's pace: µs of one compiled quick-return acceleration evaluation (the benchmark's
+    acceleration_evaluation row), timed now; what ``make reproduce`` prints to read its stages' times by."""
+    return eval_cost_us("quick_return", "smooth_cutting", {}, 5, 20000)

@@ -215,6 +215,8 @@ def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
         ws.qdd[i] = ws.x[i]
     for k in range(r):
         ws.lam[k] = ws.x[m + k]
+    if phases is None:   # the loop compiled for runs without friction (study.fast.frontend.entry): no friction code
+        return OK
     if ci[CI_FRICTION] == 0:
         return OK
     nt = ws.Jt.shape[0]

@@ -39,6 +39,9 @@ TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
 SEGMENT = types.Tuple((i8, f8, i8))(
     EVALUATE_T, BIAS_T, PHASES_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1,
     V1, I1, V1, V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
+#: the loop of a run without friction: ``phases`` is None, so the friction solve is not compiled into it
+#: (study.fast.dynamics.accelerations); chosen by study.fast.frontend.run
+SEGMENT_FRICTIONLESS = SEGMENT.return_type(*SEGMENT.args[:2], types.none, *SEGMENT.args[3:])
 
 
 @internal()

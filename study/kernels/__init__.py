@@ -3,6 +3,8 @@
 cache
     Where compiled code lives: numba's on-disk cache under ``cache_dir()/numba/<source hash>``, checked before
     use, with entries that heal (``kernel``, numba's ``njit`` with that cache; ``internal`` for inlined helpers).
+linking
+    Helpers compiled for linking only: optimized and turned into machine code once, in the kernel that calls them.
 signatures
     The numba function types shared by the generated code, the stabilization methods, the friction
     treatments and the kernels.

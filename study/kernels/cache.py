@@ -1,7 +1,8 @@
 """numba's on-disk cache for the study's compiled functions: where it lives, and entries that heal.
 
 Every function the study compiles is defined with :func:`kernel` (``numba.njit`` with this cache), never with
-``njit(cache=True)``:
+``njit(cache=True)``; a helper that only compiled code calls is defined with :func:`internal` and has no entry of
+its own (its code is in the entry of each kernel that calls it, :mod:`study.kernels.linking`):
 
 - **where**: numba invalidates a cached function only when *its own* file changes, not when a kernel it calls
   (in another module) changes. So every compiled artefact goes to ``cache_dir()/numba/<hash of the fast path's
@@ -27,6 +28,7 @@ from numba import njit
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, UserProvidedCacheLocator
 
 from study.cache_folder import CacheFolderError, cache_dir, configured_cache_dir, usable_folder
+from study.kernels.linking import link_only
 from study.sources import source_files, source_hash
 
 # Every module of the fast path, and the reference modules whose constants its kernels compile in.
@@ -135,9 +137,9 @@ def kernel(signature=None, **options):
 
 
 def internal():
-    """:func:`kernel` for a function that only compiled code calls: without the Python and C wrappers numba would
-    otherwise build (and optimize, and save) for every one of them, the helpers compile faster."""
-    return kernel(no_cpython_wrapper=True, no_cfunc_wrapper=True)
+    """The decorator of a function that only compiled code calls: compiled for linking into its callers only, with
+    no wrappers, no disk cache and no machine code of its own (:func:`study.kernels.linking.link_only`)."""
+    return link_only
 
 
 @contextmanager

@@ -274,10 +274,13 @@ def _cost_lines(ctx: ReportContext) -> list[str]:
     compile_df = _read(ctx, "compile_time.csv")
     if compile_df is not None:
         lines += ["Time to the first result (a new process per row; a cold cache generates and compiles, a warm one "
-                  "loads; CPU is the child's, less sensitive to a shared machine than wall time):", "",
+                  "loads; CPU is the child's, less sensitive to a shared machine than wall time; the pace is the "
+                  "host's µs per compiled quick-return evaluation, and CPU / pace compares hosts of different "
+                  "speed):", "",
                   _frame_table(compile_df, {"path": "path", "cache": "cache", "mechanism": "mechanism",
                                             "repeat": "repeat", "first_call_wall_s": "first result, wall [s]",
-                                            "cpu_s": "CPU [s]"}, {"repeat"}), ""]
+                                            "cpu_s": "CPU [s]", "pace_us": "pace [µs per evaluation]",
+                                            "cpu_s_at_pace_1us": "CPU at a pace of 1 µs [s]"}, {"repeat"}), ""]
     return lines
 
 
