@@ -40,6 +40,7 @@ from study.pipeline import Case, Store
 from study.pipeline.tables import forget_table, table_names, write_table
 from study.reference_data import tolerance
 from study.results import SimulationResult
+from study.compare import common_samples
 from study.studies.cross_validation import joint_force_deviations, state_deviations, with_orders
 
 METHODS = ("none", "baumgarte", "sliding_mode", "projection")
@@ -268,19 +269,39 @@ def _orders(convergence: pd.DataFrame) -> pd.DataFrame:
 
 
 def _reactions(mech: Mechanism, ref: SimulationResult, index3: dict[float, SimulationResult]) -> pd.DataFrame:
-    """Every joint's reaction, in-house (from the reference) against Exudyn's finest index-3 run (by step h)."""
-    from study.reactions import joint_reactions
-
+    """Every joint's reaction, in-house (from the reference) against Exudyn's finest index-3 run (by step h), by the
+    mechanism's kind (REACTIONS)."""
     rows = []
     if index3:
         h = min(index3)
-        ex = index3[h]
-        inhouse = {k: v for k, v in joint_reactions(mech, ref).items() if k in ex.forces}
         rows = [{"reaction": k, "exudyn_h": h, "max_abs_in_house_N": scale, "max_abs_difference_N": diff,
                  "difference_relative": diff / scale if scale > 0 else np.nan}
-                for k, (diff, scale) in joint_force_deviations(ex, ref, inhouse).items()]
+                for k, (diff, scale) in REACTIONS[mech.kind](mech, ref, index3[h]).items()]
     return pd.DataFrame(rows, columns=["reaction", "exudyn_h", "max_abs_in_house_N", "max_abs_difference_N",
                                        "difference_relative"])
+
+
+def _planar_reactions(mech: Mechanism, ref: SimulationResult, ex: SimulationResult) -> dict[str, tuple[float, float]]:
+    """The joints' force components (:func:`study.reactions.joint_reactions`) that Exudyn's run outputs."""
+    from study.reactions import joint_reactions
+
+    inhouse = {k: v for k, v in joint_reactions(mech, ref).items() if k in ex.forces}
+    return joint_force_deviations(ex, ref, inhouse)
+
+
+def _multiplier_reactions(mech: Mechanism, ref: SimulationResult,
+                          ex: SimulationResult) -> dict[str, tuple[float, float]]:
+    """A spatial mechanism's joint rows' multipliers (a translation row's a force [N], a rotation row's a moment
+    [N m]), both results in the rows of ``mech.equations()`` (study.exudyn_models.spatial maps Exudyn's); the
+    Euler-parameter norm rows carry no reaction and are left out."""
+    ia, ib = common_samples(ex, ref)
+    norms = {f"{body}_norm" for body in mech.description.bodies}
+    return {name: (float(np.abs(ex.lam[ia, k] - ref.lam[ib, k]).max()), float(np.abs(ref.lam[ib, k]).max()))
+            for k, name in enumerate(mech.equations().constraint_names) if name not in norms}
+
+
+#: a mechanism's kind -> (mechanism, in-house reference, Exudyn run) -> reaction name -> (max |difference|, max |in-house|)
+REACTIONS = {"planar": _planar_reactions, "spatial": _multiplier_reactions}
 
 
 def validate(mech: Mechanism, settings: Settings, out: str | Path,

@@ -15,6 +15,27 @@ from study.results import SimulationResult
 from study.solver.friction import DEFAULT_EPS
 
 
+def _planar_model(mechanism, t_end: float, **options) -> SimulationResult:
+    from study.exudyn_models import run as translate
+
+    return translate(mechanism, t_end, **options)
+
+
+def _spatial_model(mechanism, t_end: float, **options) -> SimulationResult:
+    from study.exudyn_models.spatial import run as translate
+
+    return translate(mechanism, t_end, **options)
+
+
+#: a mechanism's kind (:attr:`study.Mechanism.kind`; a study mechanism's ParameterSet is planar) -> its Exudyn
+#: translator's ``run(mechanism, t_end, **Exudyn.options())`` (Exudyn is imported when a run needs it)
+EXUDYN_TRANSLATORS = {"planar": _planar_model, "spatial": _spatial_model}
+#: a mechanism's kind -> in-house backend -> why it does not run that kind yet
+INHOUSE_REFUSED = {"spatial": {"compiled": "the compiled backend's code generator does not print the spatial "
+                                           "equations (r and Euler parameters p per body) yet: use "
+                                           "backend='reference'"}}
+
+
 def resolve(eom_or_mechanism, variant: str | None = None):
     """An EquationsOfMotion, a Mechanism (a description with its parameter set) or a built-in mechanism name (with
     its variant) -> (eom, mechanism or None)."""
@@ -51,7 +72,8 @@ def one_blas_thread(fn):
 @one_blas_thread
 def run(mechanism, spec, t_end: float = 1.0, *, q0=None, qd0=None,
         progress: Callable[[float], None] | None = None) -> SimulationResult:
-    """Run ``mechanism`` (a :class:`study.Mechanism`, a study mechanism's name with its seed parameters, for Exudyn also
+    """Run ``mechanism`` (a :class:`study.Mechanism` or a :class:`study.spatial.SpatialMechanism` (Exudyn's model of
+    its kind, EXUDYN_TRANSLATORS), a study mechanism's name with its seed parameters, for Exudyn also
     a study mechanism's ParameterSet, for the in-house engine a user's EquationsOfMotion with ``q0`` and ``qd0``) over [0, ``t_end``] as ``spec`` says: an
     :class:`study.engines.InHouse` or an :class:`study.engines.Exudyn` run specification.
 
@@ -61,6 +83,9 @@ def run(mechanism, spec, t_end: float = 1.0, *, q0=None, qd0=None,
         from study.engines.inhouse_run import run_inhouse
 
         eom, mech = resolve(mechanism)
+        if spec.backend in INHOUSE_REFUSED.get(getattr(mech, "kind", "planar"), {}):
+            raise ValueError(f"backend = {spec.backend!r} does not run {mech.name} yet: "
+                             f"{INHOUSE_REFUSED[mech.kind][spec.backend]}")
         return run_inhouse(eom, mech, spec, t_end, q0, qd0, progress)
     if not isinstance(spec, Exudyn):
         raise ValueError(f"spec = {spec!r} must be a run specification: study.engines.InHouse(...) or "
@@ -73,11 +98,9 @@ def run(mechanism, spec, t_end: float = 1.0, *, q0=None, qd0=None,
     if isinstance(mechanism, EquationsOfMotion):
         raise ValueError(f"mechanism = {mechanism.name!r} is an EquationsOfMotion: Exudyn builds its model from a "
                          f"description; give a Mechanism")
-    from study import exudyn_models
-
     spec.checked(t_end)
     target = resolve(mechanism)[1] if isinstance(mechanism, str) else mechanism   # a Mechanism or a ParameterSet
-    return exudyn_models.run(target, t_end, **spec.options())
+    return EXUDYN_TRANSLATORS[getattr(target, "kind", "planar")](target, t_end, **spec.options())
 
 
 def spec_from_dict(d: Mapping[str, Any]):

@@ -286,7 +286,7 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
         "solver": solver, "solver_description": settings.SOLVER_DESCRIPTIONS[solver], "h": grid.h,
         "t_end": grid.t_end, "output_step": grid.h * grid.stride, "mechanism": b.d.name,
         "coordinate_names": list(eom.coordinate_names), "constraint_names": list(eom.constraint_names),
-        "newton_tolerance": settings.NEWTON_TOLERANCE,
+        "newton_tolerance": stats["newton_tolerance"], "configuration": stats["configuration"],
         "spectral_radius": settings.SPECTRAL_RADIUS if solver == "index3" else None,
         "qdd_source": "Exudyn node accelerations (Coordinates_tt sensors), not finite differences",
         "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, **eom.redundancy_note(),
@@ -298,26 +298,51 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
 
 
 def run_spatial(d: SpatialDescription, eom: EquationsOfMotion, q0, qd0, t_end: float, h: float,
-                solver: str = "index3", output_step: float | None = None) -> SimulationResult:
+                solver: str = "index3", output_step: float | None = None, configuration: str = "python",
+                ignore_singular: bool = False, linear_solver: str = "dense",
+                newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
     """Simulate a spatial description in Exudyn from the consistent state (q0, qd0) (:func:`study.spatial.
     initial_state`); ``eom`` (:func:`study.spatial.spatial_equations` of the same description) maps the result.
 
     ``solver``: 'index3' (generalized-alpha, index-3 constraints) or 'index2' (trapezoidal, index-2); Exudyn's
     explicit solvers refuse the joints and the Euler-parameter rows (``exudyn.ModelError``). ``t_end`` a whole
-    number of fixed steps ``h``; ``output_step`` a whole multiple of h (default: every step).
+    number of fixed steps ``h``; ``output_step`` a whole multiple of h (default: every step); ``configuration``,
+    ``ignore_singular``, ``linear_solver``, ``newton_tolerance`` as for :func:`study.exudyn_models.run`.
     """
-    grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS)
+    grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS, configuration,
+                                    linear_solver, ignore_singular, newton_tolerance)
     q0 = np.asarray(q0, dtype=float)
     b = build(d, q0, qd0)
     # loads of time only: no load Jacobian. Redundant rows (eom.redundant_rows): Newton's singular matrix factorized
     # with the dependent equations left out (linearSolver.ignoreSingularJacobian) by Eigen's dense full-pivoting LU,
     # as in Exudyn's TestModels/bricardMechanism.py; Exudyn's own dense inverse (EXUdense) stops at the first step of
     # Bricard's mechanism with the flag set ('reduction of step size reached minimum step size')
-    ignore = eom.redundant_rows > 0
-    simulation = settings.simulation_settings(grid, solver, 0, ignore_singular=ignore)
-    if ignore:
+    redundant = eom.redundant_rows > 0
+    ignore = ignore_singular or redundant
+    simulation = settings.simulation_settings(grid, solver, 0, configuration, ignore, linear_solver, newton_tolerance)
+    if redundant:
         simulation.linearSolver.solverType = exu.LinearSolverType.EigenDense
-    stats = {"configuration": "python", "linear_solver": "eigen_dense" if ignore else "dense",
-             "newton_tolerance": settings.NEWTON_TOLERANCE, "ignore_singular_jacobian": ignore}
+    stats = {"configuration": configuration, "linear_solver": "eigen_dense" if redundant else linear_solver,
+             "newton_tolerance": newton_tolerance, "ignore_singular_jacobian": ignore}
     stats.update(solve.solve(b.model, simulation, solver))
     return result(b, eom, q0, grid, solver, stats)
+
+
+#: the Exudyn run's friction options a spatial description takes: it has no friction entries yet, so the
+#: regularized law (the Exudyn specification's default) and none are the same frictionless model
+FRICTIONLESS = ("regularized", "none")
+
+
+def run(mechanism, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
+        friction: str = "regularized", eps: float = settings.DEFAULT_EPS, configuration: str = "python",
+        ignore_singular: bool = False, linear_solver: str = "dense",
+        newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
+    """:func:`run_spatial` of a :class:`study.spatial.SpatialMechanism` from its consistent initial state, with the
+    options of :func:`study.exudyn_models.run` (``study.run(mechanism, Exudyn(...), t_end)`` calls it for a spatial
+    mechanism); ``friction`` 'regularized' or 'none' (FRICTIONLESS), ``eps`` then unused."""
+    if friction not in FRICTIONLESS:
+        raise ValueError(f"friction = {friction!r}: {mechanism.name} is spatial and has no friction entries; "
+                         f"valid choices: {', '.join(FRICTIONLESS)}")
+    state = mechanism.initial_state()
+    return run_spatial(mechanism.description, mechanism.equations(), state.q, state.qd, t_end, h, solver,
+                       output_step, configuration, ignore_singular, linear_solver, newton_tolerance)

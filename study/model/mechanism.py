@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import InitVar, dataclass, field
-from typing import Mapping
+from typing import ClassVar, Mapping
 
 import numpy as np
 import sympy as sp
@@ -57,10 +57,14 @@ class Mechanism:
     _equations: dict = field(default_factory=dict, repr=False)
     q0: InitVar[Mapping[str, float] | None] = None
     qd0: InitVar[Mapping[str, float] | None] = None
+    #: what the engines dispatch on: 'planar' here, 'spatial' for :class:`study.spatial.SpatialMechanism`
+    kind: ClassVar[str] = "planar"
 
     def __post_init__(self, q0, qd0) -> None:
         if not isinstance(self.description, Description):
-            raise TypeError(f"Mechanism(description=...) takes a study.Description, got {type(self.description).__name__}")
+            raise TypeError(f"Mechanism(description=...) takes a planar study.Description, got "
+                            f"{type(self.description).__name__}; a spatial description's mechanism is "
+                            f"study.spatial.SpatialMechanism(description, positions=..., ...), never a planar one")
         self.description.validate()
         if self.parameters is None:
             if q0 is None:

@@ -22,9 +22,9 @@ from study.imports import dependencies
 from study.sources import source_hash
 
 # Where a case's result is computed (study.pipeline.execute.run_case), per engine; the key covers what they import.
-ENTRY_MODULES = {
-    "inhouse": ("study.pipeline.execute", "study.simulate", "study.mechanisms"),
-    "exudyn": ("study.pipeline.execute", "study.exudyn_models", "study.mechanisms"),
+ENTRY_MODULES = {   # study.spatial: a spatial mechanism's equations (the engines reach them through the Mechanism)
+    "inhouse": ("study.pipeline.execute", "study.simulate", "study.mechanisms", "study.spatial"),
+    "exudyn": ("study.pipeline.execute", "study.exudyn_models", "study.mechanisms", "study.spatial"),
 }
 NUMERIC_PACKAGES = {"inhouse": ("numpy", "scipy", "sympy", "numba"), "exudyn": ("numpy", "scipy", "sympy", "exudyn")}
 DESCRIPTIONS = "study.mechanisms."   # the description modules: keyed by what they produce (mechanism_hash)

@@ -6,6 +6,8 @@
 * :mod:`~study.spatial.joints`, :mod:`~study.spatial.derive`: the symbolic equations in r (3) and p (4) per body;
 * :mod:`~study.spatial.equations`: those equations as the solver's EquationsOfMotion;
 * :mod:`~study.spatial.initial`: the consistent initial state from angular velocities per body;
+* :mod:`~study.spatial.mechanism`: :class:`SpatialMechanism`, a description with its start by body, what every engine
+  takes (``study.run``, ``study.validate``), the one public way to run a spatial mechanism;
 * :mod:`~study.spatial.bricard`: Bricard's mechanism (IFToMM A04), rows redundant at every configuration.
 """
 
@@ -13,5 +15,7 @@ from study.spatial.description import SpatialDescription
 from study.spatial.elements import GROUND, SpatialDescriptionError
 from study.spatial.equations import spatial_equations
 from study.spatial.initial import initial_state
+from study.spatial.mechanism import SpatialMechanism
 
-__all__ = ["GROUND", "SpatialDescription", "SpatialDescriptionError", "initial_state", "spatial_equations"]
+__all__ = ["GROUND", "SpatialDescription", "SpatialDescriptionError", "SpatialMechanism", "initial_state",
+           "spatial_equations"]

@@ -14,6 +14,8 @@ the other two), a point or axis a real 3-vector, an axis not zero. A wrong value
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -244,3 +246,20 @@ class SpatialDescription:
         if frame not in FRAMES:
             raise SpatialDescriptionError(f"torque {name!r}: frame = {frame!r} must be one of {FRAMES}")
         self.loads.append(TorqueLoad(name, body, load_components(components, self.t, f"torque {name!r}"), frame))
+
+    def fingerprint(self) -> str:
+        """SHA-256 (16 hex) of the description's content: its bodies, joints, loads, gravity and declared redundant
+        rows, every number at full precision (``repr``) and every law as sympy prints it."""
+        def plain(value):
+            if isinstance(value, np.ndarray):
+                return [plain(v) for v in value.tolist()]
+            if isinstance(value, (list, tuple)):
+                return [plain(v) for v in value]
+            if isinstance(value, Mapping):
+                return {k: plain(v) for k, v in sorted(value.items())}
+            return repr(value) if isinstance(value, float) else str(value)
+
+        parts = [("body", plain(dataclasses.asdict(b))) for b in self.bodies.values()]
+        parts += [(type(e).__name__, plain(dataclasses.asdict(e))) for e in (*self.joints, *self.loads)]
+        parts += [("gravity", plain(self.gravity_vector)), ("redundant", self.redundant, self.redundancy_reason)]
+        return hashlib.sha256(repr((self.name, parts)).encode()).hexdigest()[:16]

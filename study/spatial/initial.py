@@ -7,8 +7,10 @@ axes perpendicular within ``spatial_universal_perpendicular`` (else refused by n
 constraint rows (the joints' and the norm rows), with the minimum-norm correction, brings q onto Phi(q) = 0.
 Velocities: each body's angular velocity, given in the 'global' or the 'body' frame, sets its Euler-parameter rates
 p_dot = 1/2 E^T omega = 1/2 G^T omega' (:mod:`study.spatial.rotations`); the centres' velocities (given ones as the
-start) are corrected by the least change that satisfies Phi_q qd = 0 with the rates held. If no such change exists
-(the angular velocities violate a joint, e.g. a turn about a revolute joint's crossing axis) the start is refused.
+start) and the Euler-parameter rates of the bodies whose angular velocity is not given (zero as the start) are
+corrected by the least change that satisfies Phi_q qd = 0 with the given rates held: in a closed loop (a slider-crank)
+the crank's angular velocity is given and the coupler's follows from the joints. If no such change exists (the given
+angular velocities violate a joint, e.g. a turn about a revolute joint's crossing axis) the start is refused.
 """
 
 from __future__ import annotations
@@ -107,12 +109,14 @@ def _check_rank(d: SpatialDescription, eom: EquationsOfMotion, q: np.ndarray) ->
                                                                  "not dependent here"))
 
 
-def _velocities(eom: EquationsOfMotion, q: np.ndarray, v: list, w: list, frame: str) -> np.ndarray:
+def _velocities(eom: EquationsOfMotion, q: np.ndarray, v: list, w: list, frame: str, turning: list[bool]) -> np.ndarray:
+    """qd from the centres' velocities v and angular velocities w; the centres' velocities and the rates of the
+    bodies not ``turning`` (no angular velocity given) corrected by the least change onto Phi_q qd = 0."""
     qd = np.concatenate([np.concatenate([v_i, euler_rates(q[7 * i + 3:7 * i + 7], w_i, frame)])
                          for i, (v_i, w_i) in enumerate(zip(v, w))])
     jac = eom.phi_q(q)
-    translations = np.array([7 * i + k for i in range(len(v)) for k in range(3)])
-    qd[translations] -= np.linalg.lstsq(jac[:, translations], jac @ qd, rcond=None)[0]
+    free = np.array([7 * i + k for i, given in enumerate(turning) for k in range(3 if given else 7)])
+    qd[free] -= np.linalg.lstsq(jac[:, free], jac @ qd, rcond=None)[0]
     residual = jac @ qd
     if not residual.size:
         return qd
@@ -129,7 +133,8 @@ def initial_state(d: SpatialDescription, eom: EquationsOfMotion, positions: Mapp
                   angular_velocities: Mapping[str, Sequence[float]] | None = None, frame: str = "global",
                   velocities: Mapping[str, Sequence[float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(q0, qd0) on Phi = 0 and Phi_q qd = 0, by body name: centres, Euler parameters (default: no rotation),
-    angular velocities in ``frame`` ('global' or 'body'; default zero) and centres' velocities (default zero)."""
+    angular velocities in ``frame`` ('global' or 'body'; a body left out: the least rotation the joints allow, zero
+    when they allow it) and centres' velocities (default zero, corrected onto the joints)."""
     d = spatial_only(d)
     if frame not in FRAMES:
         raise SpatialDescriptionError(f"frame = {frame!r} of the angular velocities must be one of {FRAMES}")
@@ -144,4 +149,4 @@ def initial_state(d: SpatialDescription, eom: EquationsOfMotion, positions: Mapp
     _check_universal(d, q)
     q = _newton(eom, q)
     _check_rank(d, eom, q)
-    return q, _velocities(eom, q, v, w, frame)
+    return q, _velocities(eom, q, v, w, frame, [name in given["angular_velocities"] for name in d.bodies])
