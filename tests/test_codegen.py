@@ -1,4 +1,5 @@
-"""The one code generator (study.model.codegen): its blocks, and its two targets written from the same equations.
+"""The one code generator (study.model.codegen): its blocks, and its two targets written from the same equations,
+planar (study.model.codegen.planar_system) and spatial (study.spatial.derive.spatial_system).
 
 The compiled module is executed here as plain Python (its ``kernel`` decorator replaced by the identity), so these
 tests compare what the two targets compute without compiling anything.
@@ -11,12 +12,14 @@ import pytest
 import sympy as sp
 
 from study.mechanisms import description
-from study.model.codegen import block_lines, compiled_source, reference_source
+from study.model.codegen import block_lines, compiled_source, planar_system, reference_source
 from study.model.compile import compile_description
 from study.model.coordinates import lower
 from study.model.derive import derive
 from study.params import load_parameters
 from study.reference_data import tolerance
+from study.spatial import spatial_equations
+from study.spatial.bricard import bricard
 
 X, Y = sp.symbols("x y")
 
@@ -45,35 +48,46 @@ def test_both_targets_begin_with_the_generated_code_header():
     from test_sizes import GENERATED_HEADER
 
     b = lower(description(load_parameters("slider_crank")), "relative")
-    eqs = derive(b)
-    assert reference_source(b, eqs).startswith(GENERATED_HEADER)
-    assert compiled_source(b, eqs).startswith(GENERATED_HEADER)
+    system = planar_system(b, derive(b))
+    assert reference_source(system).startswith(GENERATED_HEADER)
+    assert compiled_source(system).startswith(GENERATED_HEADER)
 
 
-def _compiled_module(b, monkeypatch) -> dict:
+def _compiled_module(system, monkeypatch) -> dict:
     import study.kernels.cache
 
     monkeypatch.setattr(study.kernels.cache, "kernel", lambda signature: (lambda f: f))
     scope = {}
-    exec(compile(compiled_source(b, derive(b)), f"<compiled {b.name}>", "exec"), scope)
+    exec(compile(compiled_source(system), f"<compiled {system.name}>", "exec"), scope)
     return scope
+
+
+def _equations(mechanism: str):
+    """(equations, the system they were generated from, its parameter values in PARAMETERS order)."""
+    if mechanism == "bricard":
+        eom = spatial_equations(bricard())
+        return eom, eom.system, np.zeros(0)
+    b = lower(description(load_parameters(mechanism)), "relative")
+    system = planar_system(b, derive(b))
+    return compile_description(b), system, np.array([float(b.values[name]) for name in system.parameters])
 
 
 def _relative(a, b):
     return np.max(np.abs(np.asarray(a) - b), initial=0.0) / max(np.max(np.abs(b), initial=0.0), 1e-300)
 
 
-@pytest.mark.parametrize("mechanism", ["quick_return", "slider_crank_pins"])
+@pytest.mark.parametrize("mechanism", ["quick_return", "slider_crank_pins", "bricard"])
 def test_the_compiled_target_computes_what_the_reference_target_computes(mechanism, monkeypatch):
     """Every output of the compiled kernels against the reference functions at one state: the same symbolic
     equations, blocked differently (one block per kernel, one per reference function), agree to round-off; the
-    switching functions are one block in both and agree exactly."""
-    b = lower(description(load_parameters(mechanism)), "relative")
-    eom, mod = compile_description(b), _compiled_module(b, monkeypatch)
+    switching functions are one block in both and agree exactly. Bricard's mechanism: a spatial system (five bodies,
+    Euler parameters, the joints' and the norm rows)."""
+    eom, system, p = _equations(mechanism)
+    mod = _compiled_module(system, monkeypatch)
+    assert mod["PARAMETERS"] == list(system.parameters)
     m, r, k = eom.n_coordinates, eom.n_constraints, len(eom.contacts) + len(eom.pin_frictions)
     rng = np.random.default_rng(0)
     t, q, qd = 0.3, rng.normal(size=m), rng.normal(size=m)
-    p = np.array([float(b.values[name]) for name in mod["PARAMETERS"]])
     live = np.zeros(mod["N_LOAD_INDICATORS"])
     mod["indicators"](t, q, qd, p, np.zeros(0), live)
     mode = np.where(live >= 0, 1, -1)

@@ -90,11 +90,14 @@ _USER_MODELS: dict[int, tuple[EquationsOfMotion, CompiledModel]] = {}   # id -> 
 
 
 def user_model(eom: EquationsOfMotion) -> CompiledModel:
-    """The compiled model of a user's equations (their callables compiled once per object)."""
+    """The compiled model of equations without a planar description (generated ones' module, or a user's callables
+    compiled; once per object)."""
     if id(eom) not in _USER_MODELS:
         from study.fast.user import user_kernels
 
-        _USER_MODELS[id(eom)] = (eom, CompiledModel(user_kernels(eom), np.zeros(0), np.zeros(0), 0, ()))
+        k = user_kernels(eom)   # no symbolic parameters (study.fast.user)
+        _USER_MODELS[id(eom)] = (eom, CompiledModel(k, np.zeros(0), np.zeros(0), k.N_LOAD_INDICATORS,
+                                                    tuple(k.WORK_NAMES)))
     return _USER_MODELS[id(eom)][1]
 
 

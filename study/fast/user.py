@@ -1,7 +1,10 @@
-"""Compiled kernels of a user's EquationsOfMotion written as plain callables.
+"""Compiled kernels of an EquationsOfMotion without a planar description: generated, or written as plain callables.
 
-A described mechanism's kernels are generated from its description (:mod:`study.model.codegen`). A
-user's equations have none: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
+A described mechanism's kernels are generated from its description (:mod:`study.model.codegen`). Equations bound from
+generated code (:class:`~study.model.compile.GeneratedEquations`, e.g. a spatial description's) get the compiled
+module of the same symbolic system (:func:`study.fast.codegen.system_module`); the compiled path has no solver for
+rank-deficient rows, so equations with redundant rows (Bricard's) are refused by name. A user's other equations have
+no description: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
 as they are and wrapped into kernels of the generated ones' signatures
 (:mod:`study.kernels.signatures`), so the same compiled loop runs them. The callables must be in the
 subset of Python and NumPy that numba compiles (numbers, arrays and math; closures over plain
@@ -15,13 +18,15 @@ point kinematics.
 
 from __future__ import annotations
 
-from types import SimpleNamespace
+from types import ModuleType, SimpleNamespace
 
 from numba import njit
 from numba.core.errors import NumbaError
 
+from study.fast.codegen import system_module
 from study.kernels.cache import kernel
 from study.kernels.signatures import EVALUATE, INDICATORS, KINEMATICS
+from study.model.compile import GeneratedEquations
 from study.model.eom import EquationsOfMotion, _no_forces
 
 
@@ -63,15 +68,19 @@ def unsupported(eom: EquationsOfMotion) -> list[str]:
     return out
 
 
-def user_kernels(eom: EquationsOfMotion) -> SimpleNamespace:
-    """``evaluate``, ``indicators`` and ``kinematics`` of a user's equations, compiled now.
+def user_kernels(eom: EquationsOfMotion) -> ModuleType | SimpleNamespace:
+    """``evaluate``, ``indicators`` and ``kinematics`` of equations without a planar description, with
+    ``PARAMETERS``, ``N_LOAD_INDICATORS`` and ``WORK_NAMES`` (none for a user's callables): the generated module of
+    :class:`GeneratedEquations`, else the callables compiled now.
 
     Raises
     ------
     ValueError
-        The equations use what the kernels do not cover, or numba cannot compile a callable; the
-        message names it, gives numba's first line, and says ``backend='reference'`` runs them.
+        Generated equations with redundant rows; or the equations use what the kernels do not cover, or numba cannot
+        compile a callable; the message names it, gives numba's first line, and says ``backend='reference'`` runs them.
     """
+    if isinstance(eom, GeneratedEquations):
+        return generated_kernels(eom)
     missing = unsupported(eom)
     if missing:
         raise ValueError(f"backend='compiled' cannot compile the EquationsOfMotion {eom.name!r}: it has "
@@ -87,4 +96,16 @@ def user_kernels(eom: EquationsOfMotion) -> SimpleNamespace:
                          "its callables must use numba's subset of Python and NumPy (numbers, arrays, math; "
                          "closures over numbers, not over objects); use backend='reference', which runs any "
                          "callables") from exc
-    return SimpleNamespace(evaluate=evaluate, indicators=_no_indicators, kinematics=kinematics)
+    return SimpleNamespace(evaluate=evaluate, indicators=_no_indicators, kinematics=kinematics, PARAMETERS=[],
+                           N_LOAD_INDICATORS=0, WORK_NAMES=())
+
+
+def generated_kernels(eom: GeneratedEquations) -> ModuleType:
+    """The compiled module of the symbolic system ``eom`` was generated from (no symbolic parameters)."""
+    if eom.redundant_rows:
+        raise ValueError(f"backend='compiled' cannot run the EquationsOfMotion {eom.name!r}: {eom.redundant_rows} of "
+                         f"its {eom.n_constraints} constraint rows are redundant (rank-deficient Phi_q at every "
+                         f"configuration) and the compiled path solves the accelerations with the multipliers, which "
+                         f"need independent rows; use backend='reference' with "
+                         f"acceleration_solver='augmented_lagrangian'")
+    return system_module(eom.system, eom.key)

@@ -5,15 +5,20 @@ The module (plain Python with ``math`` scalar functions after common-subexpressi
 source and of sympy's version (:func:`description_key`, which the compiled module's key includes too), and stored
 under the cache folder (``study.cache_folder.cache_dir()``: ``$STUDY_CACHE_DIR``, ``.cache`` in a checkout, or the
 user's cache folder)/codegen, so the sympy derivation is paid once.
-Parameters stay symbolic in the generated code; every variant reuses it.
+Parameters stay symbolic in the generated code; every variant reuses it. A system without a description of this
+package (a spatial one, :mod:`study.spatial.equations`) is keyed by its symbolic equations (:func:`system_key`) and
+bound as :class:`GeneratedEquations`, which keep the system so that the compiled path generates its kernels from the
+same equations (:mod:`study.fast.user`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib.util
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import Callable
 
 import numpy as np
 import sympy as sp
@@ -21,7 +26,7 @@ import sympy as sp
 from study.cache_folder import cache_dir  # noqa: F401  (the cache root; imported from here by callers)
 from study.integrity import ensure_generated
 from study.model.builder import MechanismBuilder
-from study.model.codegen import reference_source
+from study.model.codegen import SymbolicSystem, planar_system, reference_source
 from study.model.derive import derive
 from study.model.eom import EquationsOfMotion, FrictionalPin, SlidingContact
 from study.sources import source_files, source_hash
@@ -49,6 +54,29 @@ def description_key(b: MechanismBuilder) -> str:
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
+def system_key(s: SymbolicSystem) -> str:
+    """Hash of a symbolic system's equations (every field), the generator's source and sympy's version."""
+    parts = [_generator_source()] + [sp.srepr(value) if isinstance(value, (sp.Basic, sp.MatrixBase)) else
+                                     sp.srepr(tuple(value.items())) if isinstance(value, dict) else sp.srepr(value)
+                                     for value in vars(s).values()]
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class GeneratedEquations(EquationsOfMotion):
+    """Equations bound from the reference module of ``system`` (keyed ``key``, :func:`system_key`): the compiled path
+    generates its kernels from the same system. Its numbers are in its expressions: no symbolic parameters."""
+
+    system: SymbolicSystem | None = None
+    key: str = ""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.system is None or self.system.parameters:
+            raise ValueError(f"GeneratedEquations {self.name!r}: needs a symbolic system without parameters, got "
+                             f"{None if self.system is None else self.system.parameters!r}")
+
+
 def _load_module(path: Path, key: str) -> ModuleType:
     spec = importlib.util.spec_from_file_location(f"study_codegen_{key}", path)
     module = importlib.util.module_from_spec(spec)
@@ -56,13 +84,37 @@ def _load_module(path: Path, key: str) -> ModuleType:
     return module
 
 
+def reference_module(name: str, key: str, source: Callable[[], str]) -> ModuleType:
+    """The reference module ``name`` keyed ``key``, from the disk cache or freshly written by ``source()``."""
+    path = cache_dir() / "codegen" / f"{name}_{key}.py"
+    ensure_generated(path, source)  # checksum-verified; regenerated if it fails
+    return _load_module(path, key)
+
+
 def generated_module(b: MechanismBuilder) -> ModuleType:
     """The generated module for a description, from the disk cache or freshly generated."""
-    key = description_key(b)
-    folder = cache_dir() / "codegen"
-    path = folder / f"{b.name}_{key}.py"
-    ensure_generated(path, lambda: reference_source(b, derive(b)))  # checksum-verified; regenerated if it fails
-    return _load_module(path, key)
+    return reference_module(b.name, description_key(b), lambda: reference_source(planar_system(b, derive(b))))
+
+
+def bound_forces(f: dict, load_names, live_indicators) -> tuple[Callable, Callable]:
+    """``applied_forces(t, q, qd, mode=None)`` (each load's generalized force, by name) and ``forces(t, q, qd,
+    mode=None)`` (loads - C qd - dV/dq) of the bound reference functions ``f``; without a mode, the loads take the
+    live signs of the switching functions ``live_indicators``."""
+    velocity_terms, potential_gradient = f["velocity_terms"], f["potential_gradient"]
+    load_functions = {name: f[f"load__{name}"] for name in load_names}
+
+    def applied_forces(t, q, qd, mode=None):
+        if mode is None:  # no frozen mode: the live signs of the switching functions
+            mode = tuple(1 if g >= 0 else -1 for g in live_indicators(t, q, qd))
+        return {name: fn(t, q, qd, mode) for name, fn in load_functions.items()}
+
+    def forces(t, q, qd, mode=None):
+        total = -velocity_terms(q, qd) - potential_gradient(q)
+        for gen in applied_forces(t, q, qd, mode).values():
+            total += gen
+        return total
+
+    return applied_forces, forces
 
 
 def _sliding_contacts(b: MechanismBuilder, f: dict, subs: dict) -> list[SlidingContact]:
@@ -118,20 +170,8 @@ def compile_description(b: MechanismBuilder, parameter_hash: str = "") -> Equati
     f = module.bind(p)
     subs = {getattr(b.p, k): float(v) for k, v in b.values.items()}
 
-    velocity_terms, potential_gradient = f["velocity_terms"], f["potential_gradient"]
-    load_functions = {name: f[f"load__{name}"] for name in [ld.name for ld in b.point_loads + b.torque_loads]}
     live_indicators = f["indicators"]
-
-    def applied_forces(t, q, qd, mode=None):
-        if mode is None:  # no frozen mode: the live signs of the switching functions
-            mode = tuple(1 if g >= 0 else -1 for g in live_indicators(t, q, qd))
-        return {name: fn(t, q, qd, mode) for name, fn in load_functions.items()}
-
-    def forces(t, q, qd, mode=None):
-        total = -velocity_terms(q, qd) - potential_gradient(q)
-        for gen in applied_forces(t, q, qd, mode).values():
-            total += gen
-        return total
+    applied_forces, forces = bound_forces(f, [ld.name for ld in b.point_loads + b.torque_loads], live_indicators)
 
     return EquationsOfMotion(
         n_coordinates=len(b.q),

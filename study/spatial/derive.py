@@ -20,6 +20,7 @@ velocity terms (moved to the left as in :mod:`study.model.derive`) are C qd = -8
 Loads: gravity g is the potential V = -sum m g . r; a force f at body point s' has the generalized force
 (d(r + A s')/dq)^T f; a torque n in the global frame 2 E^T n, in the body frame 2 G^T n' (on the p block).
 Constraints: the joints' rows (:mod:`study.spatial.joints`) and one norm row per body; gamma = -(Phi_q qd)_q qd.
+:func:`spatial_system` hands them to the code generator (:mod:`study.model.codegen`) of both backends.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from study.model.codegen import SymbolicSystem
 from study.spatial.description import SpatialDescription, spatial_only
 from study.spatial.elements import PointLoad, SpatialDescriptionError
 from study.spatial.joints import BodyFrames, joint_rows
@@ -117,3 +119,15 @@ def _loads(d: SpatialDescription, q: sp.Matrix, frames: BodyFrames) -> dict[str,
         generalized[k + 3:k + 7, 0] = 2 * (e_matrix(p) if load.frame == "global" else g_matrix(p)).T * f
         loads[load.name] = generalized
     return loads
+
+
+def spatial_system(name: str, s: SpatialSymbolic) -> SymbolicSystem:
+    """The code generator's view of the equations ``s`` of mechanism ``name``: no parameters (the description's
+    numbers are in the expressions), switches, contacts or pins; its kinematic functions are the points' positions
+    ``pos__<body>.<point>`` (q) -> (3,)."""
+    return SymbolicSystem(
+        name=name, q=tuple(s.q), qd=tuple(s.qd), parameters=(), modes=(), mass=s.mass,
+        velocity_terms=s.velocity_terms, potential=s.potential,
+        potential_gradient=sp.Matrix([s.potential]).jacobian(s.q).T, phi=s.phi, phi_q=s.phi_q, gamma=s.gamma,
+        loads=s.loads, indicators=sp.zeros(0, 1), rates=(),
+        kinematics=tuple((f"pos__{point}", "q", x, (3,)) for point, x in s.points.items()))

@@ -1,60 +1,32 @@
 """A spatial description's symbolic equations as the solver's :class:`~study.model.eom.EquationsOfMotion`.
 
-Each sympy matrix of :func:`study.spatial.derive.derive_spatial` becomes a numpy function with
-:func:`sympy.lambdify` (common subexpressions eliminated), so the reference path (``study.simulate``) runs a spatial
-mechanism as it runs any user's equations: the same stabilizations, integrators and acceleration solvers act on the
-joint rows and on the Euler-parameter norm rows alike.
+The matrices of :func:`study.spatial.derive.derive_spatial` go through the one code generator of both backends
+(:mod:`study.model.codegen`, by :func:`study.spatial.derive.spatial_system`): the reference module (cached on disk
+under the system's key, :func:`study.model.compile.system_key`) is bound here, so the reference path
+(``study.simulate``) runs a spatial mechanism as it runs any equations: the same stabilizations, integrators and
+acceleration solvers act on the joint rows and on the Euler-parameter norm rows alike. The result is a
+:class:`~study.model.compile.GeneratedEquations`, which keeps the system: ``backend='compiled'`` generates its kernels
+from the same equations (:mod:`study.fast.user`).
 """
 
 from __future__ import annotations
 
-from typing import Callable
-
-import numpy as np
-import sympy as sp
-
-from study.model.eom import EquationsOfMotion
-from study.spatial.derive import SpatialSymbolic, derive_spatial
+from study.model.codegen import reference_source
+from study.model.compile import GeneratedEquations, bound_forces, reference_module, system_key
+from study.spatial.derive import derive_spatial, spatial_system
 from study.spatial.description import SpatialDescription
 
 
-def numeric(arguments: tuple, expr: sp.Matrix, shape: tuple[int, ...]) -> Callable[..., np.ndarray]:
-    """A numpy function of ``arguments`` (symbols, or matrices of symbols, each bound to one array) returning
-    ``expr`` as a float array of ``shape`` (``()``: a scalar)."""
-    flat = [list(a) if isinstance(a, sp.MatrixBase) else a for a in arguments]
-    entries = list(expr) if isinstance(expr, sp.MatrixBase) else [expr]
-    f = sp.lambdify(flat, entries, modules="numpy", cse=True)
-
-    def call(*values):
-        out = np.array(f(*values), dtype=float)
-        return float(out[0]) if shape == () else out.reshape(shape)
-    return call
-
-
-def spatial_equations(d: SpatialDescription, symbolic: SpatialSymbolic | None = None) -> EquationsOfMotion:
+def spatial_equations(d: SpatialDescription) -> GeneratedEquations:
     """The EquationsOfMotion of a spatial description (a planar one is refused by name)."""
-    s = derive_spatial(d) if symbolic is None else symbolic
-    q, qd, t = s.q, s.qd, s.t
-    m, r = len(q), s.phi.shape[0]
-    velocity_terms = numeric((q, qd), s.velocity_terms, (m,))
-    potential_gradient = numeric((q,), sp.Matrix([s.potential]).jacobian(q).T, (m,))
-    loads = {name: numeric((t, q, qd), g, (m,)) for name, g in s.loads.items()}
-
-    def applied_forces(time, qv, qdv, mode=None):
-        return {name: f(time, qv, qdv) for name, f in loads.items()}
-
-    def forces(time, qv, qdv, mode=None):
-        total = -velocity_terms(qv, qdv) - potential_gradient(qv)
-        for g in applied_forces(time, qv, qdv).values():
-            total += g
-        return total
-
-    return EquationsOfMotion(
-        n_coordinates=m, n_constraints=r,
-        mass=numeric((q,), s.mass, (m, m)), forces=forces,
-        phi=numeric((q,), s.phi, (r,)), phi_q=numeric((q,), s.phi_q, (r, m)),
-        gamma=numeric((q, qd), s.gamma, (r,)),
-        name=d.name, coordinate_names=s.coordinate_names, constraint_names=s.constraint_names,
-        potential_energy=numeric((q,), s.potential, ()), applied_forces=applied_forces,
-        points={name: numeric((q,), x, (3,)) for name, x in s.points.items()}, redundant_rows=d.redundant,
-    )
+    s = derive_spatial(d)
+    system = spatial_system(d.name, s)
+    key = system_key(system)
+    f = reference_module(d.name, key, lambda: reference_source(system)).bind([])
+    applied_forces, forces = bound_forces(f, tuple(s.loads), f["indicators"])
+    return GeneratedEquations(
+        n_coordinates=len(s.q), n_constraints=s.phi.shape[0], mass=f["mass"], forces=forces, phi=f["phi"],
+        phi_q=f["phi_q"], gamma=f["gamma"], name=d.name, coordinate_names=s.coordinate_names,
+        constraint_names=s.constraint_names, potential_energy=f["potential"], applied_forces=applied_forces,
+        points={name: f[f"pos__{name}"] for name in s.points}, kinematics=f, redundant_rows=d.redundant,
+        system=system, key=key)
