@@ -49,9 +49,19 @@ def test_a_planar_description_is_never_a_spatial_mechanism_nor_the_reverse(examp
         study.Mechanism(example.slider_crank.description, q0={"x": 0.0})
 
 
-def test_the_compiled_backend_is_refused_by_name(example):
-    with pytest.raises(ValueError, match="backend = 'compiled' does not run spatial_slider_crank yet"):
-        study.run(example.slider_crank, study.InHouse(backend="compiled"), 0.1)
+def test_study_run_takes_the_spatial_mechanism_on_both_backends(example):
+    """study.run routes a SpatialMechanism to the compiled path's generated spatial equations: RK4 with
+    backend_sample_steps equal steps on both backends differ by round-off only (fast_fixed_step_agreement's reason)."""
+    from study.engines import RK4
+
+    h = 1e-3
+    steps = int(tolerance("backend_sample_steps"))
+    runs = [study.run(example.slider_crank, study.InHouse(integrator=RK4(h=h), backend=backend, output_step=steps * h / 10),
+                      steps * h) for backend in ("compiled", "reference")]
+    fast, ref = runs
+    assert fast.meta["backend"] == "compiled" and len(fast.t) == len(ref.t) == 11
+    assert np.abs(fast.q - ref.q).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.q).max()
+    assert np.abs(fast.qd - ref.qd).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.qd).max()
 
 
 def test_a_spatial_mechanism_has_one_coordinate_set(example):

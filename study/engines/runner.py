@@ -31,11 +31,6 @@ def _spatial_model(mechanism, t_end: float, **options) -> SimulationResult:
 #: translator's ``run(mechanism, t_end, **Exudyn.options())`` (Exudyn is imported when a run needs it)
 EXUDYN_TRANSLATORS = {"planar": _planar_model, "spatial": _spatial_model}
 #: a mechanism's kind -> in-house backend -> why it does not run that kind yet
-INHOUSE_REFUSED = {"spatial": {"compiled": "the compiled backend's code generator does not print the spatial "
-                                           "equations (r and Euler parameters p per body) yet: use "
-                                           "backend='reference'"}}
-
-
 def resolve(eom_or_mechanism, variant: str | None = None):
     """An EquationsOfMotion, a Mechanism (a description with its parameter set) or a built-in mechanism name (with
     its variant) -> (eom, mechanism or None)."""
@@ -83,9 +78,6 @@ def run(mechanism, spec, t_end: float = 1.0, *, q0=None, qd0=None,
         from study.engines.inhouse_run import run_inhouse
 
         eom, mech = resolve(mechanism)
-        if spec.backend in INHOUSE_REFUSED.get(getattr(mech, "kind", "planar"), {}):
-            raise ValueError(f"backend = {spec.backend!r} does not run {mech.name} yet: "
-                             f"{INHOUSE_REFUSED[mech.kind][spec.backend]}")
         return run_inhouse(eom, mech, spec, t_end, q0, qd0, progress)
     if not isinstance(spec, Exudyn):
         raise ValueError(f"spec = {spec!r} must be a run specification: study.engines.InHouse(...) or "

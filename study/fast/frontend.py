@@ -196,7 +196,8 @@ def _pack(eom: EquationsOfMotion, mechanism: Mechanism | None,
     option arrays of the reference dynamics ``dyn``. The cache folders are checked first (``study.kernels.cache.check``):
     a run whose compiled code could not be saved is refused before anything is written."""
     check()
-    model = user_model(eom) if mechanism is None else compiled_model(mechanism)
+    planar = mechanism is not None and mechanism.kind == "planar"   # a spatial mechanism's equations are generated
+    model = compiled_model(mechanism) if planar else user_model(eom)
     n_load = model.n_load_indicators
     if dyn.work_names != model.work_names:
         raise ValueError(f"backend='compiled': the loads {dyn.work_names} of the equations differ from the compiled "
