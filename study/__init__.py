@@ -26,7 +26,10 @@ sliding mode (and each one's parameter layout)
 post-step projection (correction, position and         ``study.laws.projection``
 velocity iterations)
 friction level, a pin's reaction norm, the friction    ``study.laws.friction``
-treatments' phases (stick flags, slip factors)
+treatments' phases (stick flags, slip factors), a
+friction entry's switching functions (stuck: margin
+to the static limit; sliding: -direction v_t;
+then the direction)
 contact and pin solve (normal-force sign hypotheses,   ``study.laws.contact``
 consistency rule, Painleve cases, the pins' Newton
 step)

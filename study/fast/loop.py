@@ -27,7 +27,7 @@ from study.fast.project import project
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
                                  dense_setup, error_norm, select_initial_step, stages)
-from study.laws.friction import friction_level  # a stuck entry's limit, as the reference
+from study.laws.friction import friction_level, switching_pair   # a stuck entry's limit, the entries' switching
 from study.laws.events import crossing_finder
 
 # segment outcomes (>= 0) and failures (< 0)
@@ -46,7 +46,8 @@ SEGMENT_FRICTIONLESS = SEGMENT.return_type(*SEGMENT.args[:2], types.none, *SEGME
 
 @internal()
 def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, ws, out):
-    """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact, then 2 per pin)."""
+    """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact, then 2 per pin: the
+    law ``study.laws.friction.switching_pair``)."""
     m, nlm = ws.q.size, ci[CI_NLOADMODE]
     for i in range(m):
         ws.q[i] = y[i]
@@ -62,16 +63,13 @@ def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, 
     nc = ws.Jt.shape[0] - npin
     off, po = CF_HEADER, pin_block(nc)
     for j in range(nc + npin):
-        direction = float(mode[nlm + 2 * j + 1])
-        if mode[nlm + 2 * j] > 0 and j < nc:  # stuck contact: R + mu_s |N| - |f|
-            out[nlm + 2 * j] = friction_level(cf[off + nc + j], ws.normal[j], cf[off + 2 * nc + j]) - abs(ws.f[j])
-        elif mode[nlm + 2 * j] > 0:           # stuck pin: mu_s r |R|_delta + T0 - |tau|
-            k = j - nc
-            out[nlm + 2 * j] = friction_level(cf[po + k], ws.pin[PIN_NORM * npin + k], cf[po + 2 * npin + k]) \
-                - abs(ws.f[j])
-        else:
-            out[nlm + 2 * j] = -direction * ws.vt[j]
-        out[nlm + 2 * j + 1] = direction
+        stuck, k = mode[nlm + 2 * j] > 0, j - nc
+        level = 0.0   # the static limit, read only when stuck: a contact's R + mu_s |N|, a pin's T0 + mu_s r |R|_delta
+        if stuck and j < nc:
+            level = friction_level(cf[off + nc + j], ws.normal[j], cf[off + 2 * nc + j])
+        elif stuck:
+            level = friction_level(cf[po + k], ws.pin[PIN_NORM * npin + k], cf[po + 2 * npin + k])
+        switching_pair(stuck, level, ws.f[j], float(mode[nlm + 2 * j + 1]), ws.vt[j], out, nlm + 2 * j)
     return status
 
 

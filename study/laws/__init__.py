@@ -8,7 +8,8 @@ The homes, one module per law:
 
 friction
     The friction level (R + mu |N|, T0 + mu r |R|_delta, and the static limits), a pin's smooth reaction norm
-    |R|_delta, and the friction treatments' phases (stick flags and slip factors).
+    |R|_delta, the friction treatments' phases (stick flags and slip factors), and the exact treatment's switching
+    functions of an entry (a stuck entry's margin limit - |f|, a sliding one's -direction v_t; then the direction).
 contact
     The contact and pin solve: the normal-force sign hypotheses of the sliding contacts and their consistency rule
     (``CONSISTENCY_RTOL``), the choice of exactly one (else Painleve), and the Newton step of the pins' friction

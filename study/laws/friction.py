@@ -1,5 +1,6 @@
-"""Friction levels and phases: the size of a Coulomb force or torque, a pin's smooth reaction norm, and the stick
-flags and slip factors of each friction treatment (paper 000 eqs. 3, 32; SPEC sec. 1).
+"""Friction levels, phases and switching functions: the size of a Coulomb force or torque, a pin's smooth reaction
+norm, the stick flags and slip factors of each friction treatment (paper 000 eqs. 3, 32; SPEC sec. 1), and the exact
+treatment's switching functions of an entry (its margin to the static limit while stuck, its velocity while sliding).
 
 Every function is compiled (``study.kernels.cache.kernel``). The compiled loop calls them natively; the reference
 path calls the same compiled functions (``study.solver.friction``), and the Exudyn user functions run
@@ -8,15 +9,17 @@ path calls the same compiled functions (``study.solver.friction``), and the Exud
 The phases functions have the signature ``study.kernels.signatures.PHASES``: (mode, n_load_modes, v_t, cf, offset,
 stick, s) fills the stick flags and slip factors s (f = -s (R + mu_k |N|) in slip) of the contacts, then the pins,
 reading the treatment's numbers at ``cf[offset:]``. The treatments that name them are the classes of
-``study.solver.friction.laws``.
+``study.solver.friction.laws``. :func:`switching_pair` has the signature :data:`SWITCHING`, so the reference's rule
+(``study.solver.friction.switching``) calls the compiled function that the compiled loop (``study.fast.loop``) links.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import types
 
 from study.kernels.cache import kernel
-from study.kernels.signatures import PHASES
+from study.kernels.signatures import PHASES, V1, f8, i8
 from study.kernels.signs import sign_function
 
 
@@ -52,3 +55,25 @@ def slip_phases(mode, nlm, vt, cf, off, stick, s):
     for j in range(vt.size):
         stick[j] = False
         s[j] = sign_function(kind, vt[j], eps)
+
+
+@kernel()
+def stuck_margin(level, force):
+    """How far a stuck entry is from slipping: level - |force|, its static limit (:func:`friction_level` with the
+    static coefficient) less the force (torque) holding it; >= 0 while it holds. Scalars or arrays (``.py_func``)."""
+    return level - np.abs(force)
+
+
+#: switching_pair(stuck, level, force, direction, velocity, out, at)
+SWITCHING = types.void(types.boolean, f8, f8, f8, f8, V1, i8)
+
+
+@kernel(SWITCHING)
+def switching_pair(stuck, level, force, direction, velocity, out, at):
+    """An entry's two switching functions of the exact treatment, whose signs are its mode entries (+1 stick / -1
+    slip, the sliding direction +-1) while the mode holds, to out[at] and out[at + 1]: stuck, the margin
+    :func:`stuck_margin` (crosses zero when the static limit is reached), sliding, -direction * velocity (crosses zero
+    when the entry comes to rest); then the constant direction, which never crosses. ``level`` is read only when stuck
+    (a contact's c R + mu_s |N|, a pin's T0 + mu_s r |R|_delta), ``velocity`` (v_t, a pin's omega) only when sliding."""
+    out[at] = stuck_margin(level, force) if stuck else -direction * velocity
+    out[at + 1] = direction

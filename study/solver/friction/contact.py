@@ -54,7 +54,7 @@ import numpy as np
 from study.laws.contact import (CONSISTENT, CONVERGED, FORCE, NORMAL, OK, PIN_MAX_ITERATIONS, SCRATCH_ROWS,
                                 SIGMA, SINGULAR_HYPOTHESIS, STEP_FAILED, TOL, active_entries, assumed_signs,
                                 contact_forces, hypothesis, pin_newton_step)
-from study.laws.friction import friction_level, pin_norm
+from study.laws.friction import friction_level, pin_norm, stuck_margin
 from study.reference_data import tolerance
 from study.solver.dynamics import Dynamics
 from study.solver.friction.laws import ExactCoulomb, PlainSign, RegularizedCoulomb
@@ -275,10 +275,9 @@ class FrictionDynamics(Dynamics):
                 tau = np.zeros(len(pins))
                 tau[free], tau[held] = tau_f, -sol.lam[r:]
                 normal = np.concatenate([sol.normal, pin_norm.py_func(R[:, 0], R[:, 1], 0.0)])   # |R|
-                margin = np.where(stick, self.static_limit(normal) - np.abs(np.concatenate([sol.friction, tau])),
-                                  np.nan)
-                return ContactSolution(sol.qdd, sol.lam[:r], normal, np.concatenate([sol.friction, tau]), v,
-                                       stick.copy(), margin)
+                friction = np.concatenate([sol.friction, tau])
+                margin = np.where(stick, stuck_margin.py_func(self.static_limit(normal), friction), np.nan)
+                return ContactSolution(sol.qdd, sol.lam[:r], normal, friction, v, stick.copy(), margin)
             if outcome == STEP_FAILED:
                 break
         names = tuple(p.name for p in pins)
@@ -348,8 +347,8 @@ class FrictionDynamics(Dynamics):
         if status != OK:
             hyps = self._hypotheses(M, Q, J, c, Jt, bt, stick, s)
             self._painleve(t, hyps, sum(h["consistent"] for h in hyps))
-        margin = np.where(stick, friction_level.py_func(self._mu_s, N, self._static_resistance[:nc]) - np.abs(f),
-                          np.nan)
+        limit = friction_level.py_func(self._mu_s, N, self._static_resistance[:nc])
+        margin = np.where(stick, stuck_margin.py_func(limit, f), np.nan)
         return ContactSolution(qdd, lam, N, f, v_t, stick.copy(), margin)
 
     def _singular_hold(self, t, held):

@@ -8,6 +8,7 @@ import numpy as np
 
 from study.errors import SimulationError
 from study.laws.contact import CONSISTENCY_RTOL
+from study.laws.friction import switching_pair
 from study.laws.modes import LOOKAHEAD, as_mode, flip, settle_zeros, signs
 from study.solver.friction.contact import FrictionDynamics, PainleveError
 
@@ -26,7 +27,8 @@ class StickSlipSwitching:
     Mode = (load entries..., then per contact, then per pin with friction: e_stick, e_dir). e_stick = +1
     in stick, -1 in slip; e_dir = the frozen sliding direction (+-1; kept, unused, in stick). Indicators,
     whose signs equal the mode entries while the mode holds (a pin's v_t is its relative rotation rate
-    omega, its f the torque tau, its static limit T0 + mu_s r |R|_delta):
+    omega, its f the torque tau, its static limit T0 + mu_s r |R|_delta; the law
+    ``study.laws.friction.switching_pair``):
 
     - e_stick in slip:  -e_dir v_t       (crosses zero when the contact comes to rest)
     - e_stick in stick: c R + mu_s |N| - |f_req|   (crosses zero when the static limit is reached)
@@ -89,17 +91,18 @@ class StickSlipSwitching:
     def indicators(self, t: float, y: Array, mode) -> Array:
         dyn, eom = self.dyn, self.dyn.eom
         q, qd = self._state(y)
-        values = list(np.asarray(eom.indicators(t, q, qd), dtype=float)) if dyn.n_load_modes else []
+        nlm, n = dyn.n_load_modes, dyn.n_contacts
+        values = np.empty(nlm + 2 * n)
+        if nlm:
+            values[:nlm] = np.asarray(eom.indicators(t, q, qd), dtype=float)
         stick, _ = dyn.phases(mode, None)
         sol = dyn.contact_solution(t, q, qd, mode) if stick.any() else None
+        level, force = (dyn.static_limit(sol.normal), sol.friction) if sol is not None else (np.zeros(n), np.zeros(n))
         v = self._rates(q, qd)
-        for j in range(dyn.n_contacts):
-            direction = float(mode[self._entry(j) + 1])
-            if stick[j]:
-                values += [sol.margin[j], direction]
-            else:
-                values += [-direction * float(v[j]), direction]
-        return np.asarray(values)
+        for j in range(n):   # each entry's pair: the law study.laws.friction.switching_pair
+            e = self._entry(j)
+            switching_pair(bool(stick[j]), float(level[j]), float(force[j]), float(mode[e + 1]), float(v[j]), values, e)
+        return values
 
     def _free_direction(self, t, q, qd, mode, j) -> int:
         """Sign of contact j's tangential acceleration with no tangential force there (others as in mode).
