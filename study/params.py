@@ -210,7 +210,7 @@ def _parse(path: str, size: int, mtime_ns: int) -> dict[str, Any]:
 
 
 def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path | None = None,
-                    required: Sequence[str] = ()) -> ParameterSet:
+                    required: Sequence[str] = (), start_in_code: str = "") -> ParameterSet:
     """Load and validate one variant of a mechanism's parameter file.
 
     Parameters
@@ -225,6 +225,9 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
         The parameters the mechanism's description reads (the catalogue's :class:`study.mechanisms.Entry`): a missing
         or an unknown one is then listed with the file's other problems. Without it the file is its own schema, and
         :func:`check_parameter_names` checks the set before it is described.
+    start_in_code : str, optional
+        Where the start is given instead of ``[initial_conditions]`` (a spatial user's file: its ``start(ps)``): the
+        file must then have no such table, and the set's initial conditions are empty, with this as their source.
 
     Raises
     ------
@@ -232,11 +235,11 @@ def load_parameters(mechanism: str, variant: str = "seed", reference_dir: Path |
         Listing every missing or unknown key, wrong type, non-finite or out-of-range value.
     """
     path = _path_for(mechanism, reference_dir)
-    return parse_parameters(_read(path), mechanism, variant, path, required)
+    return parse_parameters(_read(path), mechanism, variant, path, required, start_in_code)
 
 
 def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path: Path,
-                     required: Sequence[str] = ()) -> ParameterSet:
+                     required: Sequence[str] = (), start_in_code: str = "") -> ParameterSet:
     """Validate an already-parsed parameter document (see :func:`load_parameters`)."""
     problems: list[str] = []
 
@@ -257,7 +260,14 @@ def parse_parameters(raw: Mapping[str, Any], mechanism: str, variant: str, path:
     variant_note, overridden = _apply_variant(raw.get("variants", {}), variant, mechanism, fields, values, sources,
                                               problem)
     _check_values(values, fields, overridden, variant, problem)
-    initial = _parse_initial(raw.get("initial_conditions", {}), problem)
+    if start_in_code:
+        if "initial_conditions" in raw:
+            problem("initial_conditions", sorted(raw["initial_conditions"]), f"not read: the start is {start_in_code}; "
+                    f"remove the table")
+        initial = InitialConditions(printed_q=(), printed_qd=(), printed_source=start_in_code, independent=(),
+                                    q_independent=(), qd_independent=(), branch="", source=start_in_code)
+    else:
+        initial = _parse_initial(raw.get("initial_conditions", {}), problem)
     if problems:
         raise ParameterError(f"{path} (mechanism {mechanism}, variant {variant}):\n" + "\n".join(problems))
 

@@ -6,6 +6,11 @@ line and the cause: a syntax error, an exception while the file runs or while ``
 runs (the innermost line of the user's file it passed through), a parameter the ``.toml`` lacks, a ``describe`` that
 cannot take the parameter set or returns something other than a :class:`study.Description`, a description that
 fails its checks. The exception the file raised is the ``__cause__`` (shown with ``STUDY_TRACEBACK=1``).
+
+A spatial file defines ``start(ps)`` beside ``describe(ps)``: ``describe`` returns a
+:class:`study.spatial.SpatialDescription`, ``start`` the initial state by body as a dict of the keyword arguments of
+:class:`study.spatial.SpatialMechanism` (``positions``, and optionally ``orientations``, ``angular_velocities``,
+``frame``, ``velocities``); its ``.toml`` then has no ``[initial_conditions]``. Its errors are named as a planar file's.
 """
 
 from __future__ import annotations
@@ -22,8 +27,13 @@ from study.errors import UserFileError
 from study.model.joints import Description, DescriptionError
 from study.model.mechanism import Mechanism
 from study.params import ParameterSet, available_mechanisms, load_parameters
+from study.spatial.catalogue import SPATIAL
+from study.spatial.description import SpatialDescription
+from study.spatial.elements import SpatialDescriptionError
+from study.spatial.mechanism import SpatialMechanism
 
 SHAPE = "a user's mechanism: describe(ps) in <name>.py, its parameters in <name>.toml beside it"
+START_KEYS = ("positions", "orientations", "angular_velocities", "frame", "velocities")
 
 
 def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, ParameterSet, np.ndarray | None]:
@@ -32,13 +42,19 @@ def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, Pa
     :func:`load_mechanism` makes the Mechanism; a :class:`~study.errors.UserFileError` (or a
     ParameterError for the ``.toml``) names what is wrong."""
     path = python_file(path)
-    module = _run(path)
+    return _parts(path, _run(path), variant)
+
+
+def _parts(path: Path, module: ModuleType, variant: str) -> tuple[Any, ParameterSet, np.ndarray | None]:
+    """:func:`load_parts` of the file already run (a spatial file's description is checked by :func:`_spatial`)."""
     describe = getattr(module, "describe", None)
     if describe is None:
         raise UserFileError(f"{path} defines no describe(ps) returning a study.Description ({SHAPE})")
     _takes_the_parameter_set(path, describe, "describe")
     ps = _parameters(path, module, variant)
     d = _call(path, describe, ps, "describe")
+    if _is_spatial(module):
+        return d, ps, None
     if not isinstance(d, Description):
         raise UserFileError(f"{path}: describe(ps) at line {_first_line(describe)} returned {_kind(d)}, not a "
                             f"study.Description{_hint(d)}")
@@ -55,9 +71,43 @@ def load_parts(path: str | Path, variant: str = "seed") -> tuple[Description, Pa
 
 
 def load_mechanism(path: str | Path, variant: str = "seed") -> Mechanism:
-    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``) and its parameter file beside it
-    (whatever is wrong in the file is one UserFileError naming the file, the function, the line and the cause)."""
-    return Mechanism(*load_parts(path, variant))
+    """A user's mechanism file (``describe(ps)``, optional ``initial_guess(ps)``; a spatial one ``start(ps)``) and its
+    parameter file beside it (whatever is wrong in the file is one UserFileError naming the file, the function, the
+    line and the cause)."""
+    path = python_file(path)
+    module = _run(path)
+    d, ps, guess = _parts(path, module, variant)
+    return _spatial(path, module, d, ps) if _is_spatial(module) else Mechanism(d, ps, guess)
+
+
+def _is_spatial(module: ModuleType) -> bool:
+    """Whether a user's file is spatial: it defines start(ps)."""
+    return getattr(module, "start", None) is not None
+
+
+def _spatial(path: Path, module: ModuleType, d: Any, ps: ParameterSet) -> SpatialMechanism:
+    """The SpatialMechanism of a spatial file's description and its ``start(ps)``."""
+    if not isinstance(d, SpatialDescription):
+        raise UserFileError(f"{path}: describe(ps) at line {_first_line(module.describe)} returned {_kind(d)}, not a "
+                            f"study.spatial.SpatialDescription (the file defines start(ps), so it is spatial)")
+    _takes_the_parameter_set(path, module.start, "start")
+    start = _call(path, module.start, ps, "start")
+    line = _first_line(module.start)
+    if not isinstance(start, dict):
+        raise UserFileError(f"{path}: start(ps) at line {line} returned {_kind(start)}, not a dict of "
+                            f"{', '.join(START_KEYS)}")
+    unknown = sorted(set(start) - set(START_KEYS))
+    if unknown:
+        raise UserFileError(f"{path}: start(ps) at line {line} returned the unknown keys {', '.join(map(str, unknown))} "
+                            f"(valid: {', '.join(START_KEYS)})")
+    if "positions" not in start:
+        raise UserFileError(f"{path}: start(ps) at line {line} gives no 'positions' (every body's centre [m])")
+    try:   # the start is checked as it is solved: its errors are the file's
+        mechanism = SpatialMechanism(d, **start)
+        mechanism.initial_state()
+        return mechanism
+    except SpatialDescriptionError as exc:
+        raise UserFileError(f"{path}: start(ps) at line {line}: {exc}") from exc
 
 
 def python_file(path: str | Path) -> Path:
@@ -121,14 +171,15 @@ def _first_line(function: Any) -> int | str:
 def _parameters(path: Path, module: ModuleType, variant: str) -> ParameterSet:
     """The parameter set of ``<name>.toml`` beside the file, with every name of the module's ``PARAMETERS``."""
     toml = path.with_suffix(".toml")
-    if path.stem in available_mechanisms():
+    if path.stem in (*available_mechanisms(), *SPATIAL):
         raise UserFileError(f"{path}: a user's mechanism cannot be named like the study's mechanism {path.stem!r} "
                             f"(its results would carry that name, by which the reports read the study mechanism's label and units): "
                             f"rename "
                             f"{path.name} and {toml.name}")
     if not toml.is_file():
         raise UserFileError(f"{path}: its parameter file {toml} does not exist ({SHAPE})")
-    ps = load_parameters(path.stem, variant, reference_dir=path.parent)
+    ps = load_parameters(path.stem, variant, reference_dir=path.parent,
+                         start_in_code=f"{path.name}'s start(ps)" if _is_spatial(module) else "")
     missing = [k for k in getattr(module, "PARAMETERS", ()) if not hasattr(ps.values, k)]
     if missing:
         raise UserFileError(f"{toml}: {', '.join(f'parameters.{k}' for k in missing)} missing ({path.name}'s "

@@ -214,7 +214,7 @@ def test_case_lists_name_their_report_sections(tmp_path):
 
     assert report_sections(pl.load_case_lists()) == (
         "claims", "initial", "errata", "sliding_mode", "sensitivity", "slider_crank", "cross_validation",
-        "moving_friction", "work_precision", "benchmarks", "beyond_papers", "backends", "energy_balance",
+        "moving_friction", "work_precision", "benchmarks", "spatial", "beyond_papers", "backends", "energy_balance",
         "reproducibility")
     folder = tmp_path / "cases"
     folder.mkdir()

@@ -12,7 +12,8 @@ from scipy.integrate import solve_ivp
 
 from study.reference_data import tolerance, values
 from study.simulate import simulate
-from study.spatial import GROUND, SpatialDescription, initial_state, spatial_equations
+from study.spatial import initial_state, spatial_equations
+from study.spatial.heavy_top import heavy_top
 
 TABLE = "spatial/heavy_top"
 RTOL = 1e-12   # the runs' tolerance; the bound of [spatial_heavy_top_independent] rests on it
@@ -41,16 +42,6 @@ def independent_top(t_end: float, rtol: float = 1e-13, atol: float = 1e-15) -> n
 
     y0 = np.concatenate([values("angular_velocity", TABLE), [1.0, 0.0, 0.0, 0.0]])
     return solve_ivp(rates, (0.0, t_end), y0, method="DOP853", rtol=rtol, atol=atol).y[3:, -1]
-
-
-def heavy_top() -> SpatialDescription:
-    """The top as a body whose centre of mass starts at c, on a spherical joint at its body point -c to the origin."""
-    c = np.array(values("centre_of_mass", TABLE))
-    d = SpatialDescription("heavy_top", label="heavy top (Terze, Müller, Zlatar 2016)")
-    d.body("top", tolerance("mass", TABLE), values("inertia", TABLE), points={"pivot": tuple(-c)})
-    d.spherical("fixed_point", ("top", "pivot"), (GROUND, (0.0, 0.0, 0.0)))
-    d.gravity(values("gravity", TABLE))
-    return d
 
 
 def heavy_top_start():

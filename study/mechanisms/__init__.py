@@ -1,4 +1,5 @@
-"""The study's mechanisms: a registry of describe functions, name -> :class:`Entry`.
+"""The study's mechanisms: a registry of describe functions, name -> :class:`Entry`; the spatial ones in
+:data:`study.spatial.catalogue.SPATIAL` (:func:`named_mechanism` looks in both).
 
 A study mechanism ``name`` is a parameter file ``reference/<name>.toml`` (with provenance, :mod:`study.params`) plus
 an entry of :data:`CATALOGUE`: its module ``study.mechanisms.<name>`` gives ``describe(ps) -> Description``, the
@@ -27,7 +28,9 @@ from study.model.coordinates import lower
 from study.model.initial_state import ConsistentState
 from study.model.joints import Description
 from study.model.mechanism import consistent_state, on_branch as _on_branch
-from study.params import ParameterError, ParameterSet, check_parameter_names, load_parameters
+from study.params import (ParameterError, ParameterSet, available_mechanisms, available_variants,
+                          check_parameter_names, load_parameters)
+from study.spatial.catalogue import SPATIAL
 from study.user_mechanism import load_mechanism
 
 
@@ -58,7 +61,8 @@ CATALOGUE: Mapping[str, Entry] = MappingProxyType({
 def entry(name: str) -> Entry:
     """The catalogue's entry of a mechanism (a ParameterError, a ValueError, naming the valid choices)."""
     if name not in CATALOGUE:
-        raise ParameterError(f"unknown mechanism {name!r}; valid choices: {', '.join(CATALOGUE)}")
+        raise ParameterError(f"unknown mechanism {name!r}; valid choices: {', '.join(CATALOGUE)} (spatial: "
+                             f"{', '.join(SPATIAL)})")
     return CATALOGUE[name]
 
 
@@ -112,11 +116,28 @@ def is_user_file(name: str) -> bool:
     return name.endswith(".py")
 
 
+def names() -> tuple[str, ...]:
+    """Every study mechanism's name: the planar ones with a parameter file, then the spatial ones."""
+    return (*available_mechanisms(), *SPATIAL)
+
+
+def variants(name: str) -> tuple[str, ...]:
+    """The variants of a study mechanism (a spatial one has its one start, 'seed')."""
+    return ("seed",) if name in SPATIAL else tuple(available_variants(name))
+
+
 @lru_cache(maxsize=None)
 def named_mechanism(name: str, variant: str = "seed") -> Mechanism:
-    """A study mechanism by name (its registry entry and packaged parameter file), or a user's mechanism file by its
-    path (``.py``), in a variant."""
-    return load_mechanism(name, variant) if is_user_file(name) else mechanism(parameters(name, variant))
+    """A study mechanism by name (its registry entry and packaged parameter file, or the spatial registry's), or a
+    user's mechanism file by its path (``.py``), in a variant."""
+    if is_user_file(name):
+        return load_mechanism(name, variant)
+    if name in SPATIAL:
+        if variant not in variants(name):
+            raise ParameterError(f"variant = {variant!r} is not a variant of the spatial mechanism {name}; valid "
+                                 f"choices: {', '.join(variants(name))}")
+        return SPATIAL[name]()
+    return mechanism(parameters(name, variant))
 
 
 def parameters(name: str, variant: str = "seed") -> ParameterSet:

@@ -247,7 +247,7 @@ def _check_group(g: Mapping, where: str) -> None:
 
 def _check_case(case: Case, where: str) -> None:
     """A case's mechanism and variant exist and its options are arguments of its engine, of their types."""
-    from study.params import available_mechanisms, available_variants
+    from study.mechanisms import names, variants
 
     if is_user_file(case.mechanism):
         try:
@@ -255,14 +255,14 @@ def _check_case(case: Case, where: str) -> None:
         except Exception as exc:   # anything a user's file raises is a problem of the case list's input
             raise CaseListError(f"{where}: mechanism = {case.mechanism!r}: {type(exc).__name__}: {exc}") from exc
     else:
-        known = available_mechanisms()
+        known = names()
         if case.mechanism not in known:
             raise CaseListError(f"{where}: mechanism = {case.mechanism!r} is not known; valid choices: "
                                 f"{', '.join(known)}, or a user's mechanism file (a path ending in .py)")
-        variants = available_variants(case.mechanism)
-        if case.variant not in variants:
+        known = variants(case.mechanism)
+        if case.variant not in known:
             raise CaseListError(f"{where}: variant = {case.variant!r} is not a variant of {case.mechanism}; valid "
-                                f"choices: {', '.join(variants)}")
+                                f"choices: {', '.join(known)}")
     options = case.kwargs
     try:
         arguments.number("repeat", options.pop("repeat", 1), whole=True)

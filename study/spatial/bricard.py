@@ -21,6 +21,7 @@ from study.spatial.description import SpatialDescription
 from study.spatial.elements import GROUND
 from study.spatial.equations import spatial_equations
 from study.spatial.initial import initial_state
+from study.spatial.mechanism import SpatialMechanism
 
 TABLE = "spatial/bricard"
 RODS = 5
@@ -65,3 +66,10 @@ def bricard_start() -> tuple[SpatialDescription, EquationsOfMotion, np.ndarray, 
     centres = {f"rod{k + 1}": (corners[k] + corners[k + 1]) / 2 for k in range(RODS)}
     q0, qd0 = initial_state(d, eom, centres)
     return d, eom, q0, qd0
+
+
+def bricard_mechanism() -> SpatialMechanism:
+    """A04 with its start: at rest, every rod at its place (what :func:`bricard_start` solves, for every engine)."""
+    corners, _ = geometry()
+    return SpatialMechanism(bricard(), positions={f"rod{k + 1}": tuple((corners[k] + corners[k + 1]) / 2)
+                                                  for k in range(RODS)})

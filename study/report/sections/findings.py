@@ -25,6 +25,7 @@ from study.bench.settings import RATIO_LEVEL
 from study.reference_data import tolerance
 from study.report.context import ReportContext
 from study.report.sections.benchmarks import FOLDER as BENCHMARKS_FOLDER
+from study.report.sections.spatial import finding as spatial
 from study.studies import sliding_mode as sm
 
 TITLE = "Findings at a glance"
@@ -161,6 +162,7 @@ QUESTIONS: tuple[tuple[str, Callable[[ReportContext], str]], ...] = (
     ("Does sliding mode beat Baumgarte at equal gains?", sliding_mode),
     ("In-house against Exudyn, at equal accuracy and CPU?", exudyn),
     ("Each benchmark by its own criterion?", benchmarks),
+    ("Spatial mechanisms: the heavy top, and sliding mode's energy?", spatial),
     ("What did the papers get wrong?", errata),
 )
 
