@@ -87,3 +87,13 @@ def test_validate_exudyn_converges_at_order_two_short(example, tmp_path):
 @pytest.mark.slow
 def test_validate_exudyn_converges_at_order_two_over_one_second(example, tmp_path):
     _validate(example, tmp_path, 1.0)
+
+
+def test_the_studys_copy_is_the_users_example(example):
+    """study/spatial/slider_crank.py restates the example (the installed package cannot reach examples/): the two
+    must stay the same description and start, or the spatial study would report on another mechanism."""
+    from study.spatial.slider_crank import spatial_slider_crank
+
+    ours, users = spatial_slider_crank(), example.slider_crank
+    assert ours.description.fingerprint() == users.description.fingerprint()
+    assert ours.start == users.start
