@@ -364,5 +364,6 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
             if status != 0:
                 return _failed(status, t_new, ws, y_end, counters)
         t = t_new
-        y[:], f[:] = y_new, f_new
+        for i in range(n):   # elementwise: a slice assignment compiles numba's shape check and its message
+            y[i], f[i] = y_new[i], f_new[i]
     return _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end)
