@@ -49,8 +49,7 @@ CF_PROJ_TOL, CF_HEADER = 0, 1
 # radius (np), mu_kinetic radius (np), torque T0 (np), delta, rtol; then the bias parameters, the friction parameters
 
 # ws.pin, per pin (blocks of np): the slip factor s, the torque tau, the Newton residual F, |R|_delta (block PIN_NORM),
-# the Newton step; then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np). Kept in one array:
-# every call that passes the workspace pays per array in it (reference counts), pins or not.
+# the Newton step; then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np), in one array.
 PIN_SLIP, PIN_TAU, PIN_RESIDUAL, PIN_NORM, PIN_STEP, PIN_MATRICES = range(6)
 
 
