@@ -26,14 +26,13 @@ W_friction (only with friction)], as in the reference.
 
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numpy as np
 from numba import types
+from numba.experimental import structref
 
 from study.kernels.cache import internal, kernel
 from study.kernels.linalg import lu_factor, lu_solve
-from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, f8
+from study.kernels.signatures import B1, BIAS_T, EVALUATE_T, I1, PHASES, PHASES_T, V1, V2, f8
 from study.laws.contact import (CONVERGED, OK, PIN_MAX_ITERATIONS, PIN_NOT_CONVERGED, SCRATCH_ROWS, SINGULAR,
                                 STEP_FAILED, active_entries, contact_forces, pin_newton_step)
 from study.laws.friction import pin_norm
@@ -50,13 +49,22 @@ CF_PROJ_TOL, CF_HEADER = 0, 1
 # radius (np), mu_kinetic radius (np), torque T0 (np), delta, rtol; then the bias parameters, the friction parameters
 
 # ws.pin, per pin (blocks of np): the slip factor s, the torque tau, the Newton residual F, |R|_delta (block PIN_NORM),
-# the Newton step; then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np). Kept in one array:
-# every call that passes the workspace pays per array in it (reference counts), pins or not.
+# the Newton step; then the multipliers per unit torque (np x r) and the Newton Jacobian (np x np), in one array.
 PIN_SLIP, PIN_TAU, PIN_RESIDUAL, PIN_NORM, PIN_STEP, PIN_MATRICES = range(6)
-Workspace = namedtuple("Workspace", [
-    "q", "qd", "M", "Q", "phi", "J", "gamma", "Jt", "bt", "powers", "c", "phidot", "K", "piv", "x",
-    "qdd", "lam", "U", "L", "A", "pivA", "active", "scratch", "normal", "f", "vt", "stick", "s", "pin", "at",
-    "counters"])
+
+
+@structref.register
+class _WorkspaceType(types.StructRef):
+    """The numba type of the workspace: a reference to its arrays, so every helper that receives it gets one pointer
+    (a tuple of the arrays would be passed as its ~250 fields into and out of every call, which made most of the
+    compiled code: study.kernels.linking)."""
+
+
+WORKSPACE = _WorkspaceType([
+    ("q", V1), ("qd", V1), ("M", V2), ("Q", V1), ("phi", V1), ("J", V2), ("gamma", V1), ("Jt", V2), ("bt", V1),
+    ("powers", V1), ("c", V1), ("phidot", V1), ("K", V2), ("piv", I1), ("x", V1), ("qdd", V1), ("lam", V1),
+    ("U", V2), ("L", V2), ("A", V2), ("pivA", I1), ("active", I1), ("scratch", V2), ("normal", V1), ("f", V1),
+    ("vt", V1), ("stick", B1), ("s", V1), ("pin", V1), ("at", V1), ("counters", I1)])
 
 
 @internal()
@@ -64,14 +72,19 @@ def workspace(m, r, nc, nw, npin):
     """Every array one evaluation needs, allocated once per integration (nc contacts and npin pins: nt rows of Jt).
     ``at``: the time of the last failing evaluation; counters: [evaluations, its status]."""
     n, nt = m + r, nc + npin
-    return Workspace(
-        np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m), np.zeros(r), np.zeros((r, m)), np.zeros(r),
-        np.zeros((nt, m)), np.zeros(nt), np.zeros(nw), np.zeros(r), np.zeros(r), np.zeros((n, n)),
-        np.zeros(n, np.int64),
-        np.zeros(n), np.zeros(m), np.zeros(r), np.zeros((m, nt)), np.zeros((r, nt)), np.zeros((nt, nt)),
-        np.zeros(nt, np.int64), np.zeros(nt, np.int64), np.zeros((SCRATCH_ROWS, nt)), np.zeros(nt), np.zeros(nt),
-        np.zeros(nt), np.zeros(nt, np.bool_), np.zeros(nt), np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1),
-        np.zeros(2, np.int64))
+    ws = structref.new(WORKSPACE)
+    ws.q, ws.qd, ws.M, ws.Q = np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m)
+    ws.phi, ws.J, ws.gamma = np.zeros(r), np.zeros((r, m)), np.zeros(r)
+    ws.Jt, ws.bt, ws.powers = np.zeros((nt, m)), np.zeros(nt), np.zeros(nw)
+    ws.c, ws.phidot, ws.K, ws.piv = np.zeros(r), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64)
+    ws.x, ws.qdd, ws.lam = np.zeros(n), np.zeros(m), np.zeros(r)
+    ws.U, ws.L, ws.A = np.zeros((m, nt)), np.zeros((r, nt)), np.zeros((nt, nt))
+    ws.pivA, ws.active, ws.scratch = np.zeros(nt, np.int64), np.zeros(nt, np.int64), np.zeros((SCRATCH_ROWS, nt))
+    ws.normal, ws.f, ws.vt, ws.s = np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt)
+    ws.stick = np.zeros(nt, np.bool_)
+    ws.pin, ws.at = np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1)
+    ws.counters = np.zeros(2, np.int64)
+    return ws
 
 
 @internal()

@@ -28,10 +28,10 @@ from study.errors import NonFiniteError, RunBoundError
 from study.kernels.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
-from study.fast.dynamics import (ACCELERATIONS_ENTRY, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry, no_phases,
-                                 rhs_entry)
+from study.fast.dynamics import (ACCELERATIONS_ENTRY, CI_PROJECTS, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry,
+                                 no_phases, rhs_entry)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
-                             FAIL_STEP, SEGMENT, SEGMENT_FRICTIONLESS, integrate_segment)
+                             FAIL_STEP, integrate_segment, segment_signature)
 from study.kernels.signatures import BIAS, EVALUATE, PHASES
 from study.laws.modes import as_mode, initial_mode, switch
 from study.fast.steppers import tableau
@@ -347,12 +347,12 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
     first = float(step) if step is not None else 0.0
-    frictionless = s.phases is no_phases   # the loop without the friction solve (compiled only if a run needs it)
-    segment = entry(integrate_segment, SEGMENT_FRICTIONLESS if frictionless else SEGMENT)
-    phases = None if frictionless else s.phases
+    friction, projects = s.phases is not no_phases, bool(s.ci[CI_PROJECTS])   # the loop's parts a run needs
+    segment = entry(integrate_segment, segment_signature(friction, projects))
+    phases, kinematics = (s.phases if friction else None), (model.module.kinematics if projects else None)
     while True:
         outcome, t_reached, i_event = segment(
-            model.module.evaluate, s.bias, phases, model.module.indicators, model.module.kinematics,
+            model.module.evaluate, s.bias, phases, model.module.indicators, kinematics,
             METHOD_IDS[integrator], arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
             y_out, mode_out, counters, y_end, bounds)

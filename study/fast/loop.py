@@ -39,9 +39,18 @@ TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
 SEGMENT = types.Tuple((i8, f8, i8))(
     EVALUATE_T, BIAS_T, PHASES_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1,
     V1, I1, V1, V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
-#: the loop of a run without friction: ``phases`` is None, so the friction solve is not compiled into it
-#: (study.fast.dynamics.accelerations); chosen by study.fast.frontend.run
-SEGMENT_FRICTIONLESS = SEGMENT.return_type(*SEGMENT.args[:2], types.none, *SEGMENT.args[3:])
+
+
+def segment_signature(friction: bool, projects: bool):
+    """The loop's signature for a run (chosen by study.fast.frontend.run): without friction ``phases`` is None, so the
+    friction solve is not compiled into it (study.fast.dynamics.accelerations); without the post-step projection
+    ``kinematics`` is None, so the projection and its LAPACK calls are not (study.fast.project.project)."""
+    args = list(SEGMENT.args)
+    if not friction:
+        args[2] = types.none
+    if not projects:
+        args[4] = types.none
+    return SEGMENT.return_type(*args)
 
 
 @internal()
@@ -353,5 +362,6 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
             if status != 0:
                 return _failed(status, t_new, ws, y_end, counters)
         t = t_new
-        y[:], f[:] = y_new, f_new
+        for i in range(n):   # elementwise: a slice assignment compiles numba's shape check and its message
+            y[i], f[i] = y_new[i], f_new[i]
     return _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end)

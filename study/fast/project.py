@@ -6,12 +6,15 @@ from __future__ import annotations
 
 from study.fast.dynamics import CF_PROJ_TOL, CI_BIAS, CI_PROJ_MASS, CI_PROJ_MAXITER
 from study.kernels.cache import internal
-from study.laws.projection import project as projection
+from study.laws.projection import OK, project as projection
 
 
 @internal()
 def project(kinematics, y, p, ci, cf, m, r):
-    """Project y = [q, qd, ...] in place; returns (changed, status), status 0 (OK) or the law's failure code."""
+    """Project y = [q, qd, ...] in place; returns (changed, status), status 0 (OK) or the law's failure code.
+    ``kinematics`` None: the loop compiled for runs without projection (study.fast.loop.segment_signature)."""
+    if kinematics is None:
+        return False, OK
     q, qd = y[:m].copy(), y[m:2 * m].copy()
     changed, status = projection(kinematics, q, qd, p, r, cf[CF_PROJ_TOL], ci[CI_PROJ_MASS] == 1,
                                  ci[CI_PROJ_MAXITER], cf[ci[CI_BIAS]])
