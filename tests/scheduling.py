@@ -24,6 +24,7 @@ CV = "tests/cross_validation/"
 UNITS = {
     CV + "test_against_inhouse.py": CV + "frictionless_runs",
     CV + "test_reactions.py": CV + "frictionless_runs",
+    CV + "test_exudyn_models.py": CV + "frictionless_runs",
 }
 #: The files (or units) that go first, in this order. The first compiles the compiled path; the next five use no
 #: compiled code (sympy, the reference path, Exudyn) and keep the other worker busy meanwhile (about 75 s of CPU
@@ -33,9 +34,8 @@ LEAD = (
     "tests/test_fast.py",
     "tests/test_errata.py",
     CV + "test_friction_variants.py",
-    CV + "test_exudyn_models.py",
-    "tests/test_coordinates.py",
     CV + "frictionless_runs",
+    "tests/test_coordinates.py",
     "tests/test_backend_samples.py",
     "tests/test_solver.py",
     "tests/test_pipeline.py",
