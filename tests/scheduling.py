@@ -5,9 +5,9 @@ costs minutes: the files with few but long tests came last and one worker finish
 path's first compilation (study.fast, under its lock, study.kernels.cache.compile_lock) made the other worker wait
 idle for it as soon as it reached a compiled test too. Here the files of LEAD go first, in its order: the compiled
 path's own tests on one worker (it compiles), while the other runs files that need only the reference path, sympy
-and Exudyn; then the other long files, longest first. The files LEAD does not name follow in xdist's order; they
-are short. UNITS runs files that share runs through an in-process cache (tests/cross_validation/frictionless_runs.py)
-on one worker, as one unit of work.
+and Exudyn; then the other long files, longest first (by a cold run of the fast suite on two workers). The files
+LEAD does not name follow in xdist's order; they are short. UNITS runs files that share runs through an in-process
+cache (tests/cross_validation/frictionless_runs.py) on one worker, as one unit of work.
 
 The order changes the wall time only: every file runs in one process from its first test to its last, as before.
 tests/test_scheduling.py checks that every file named here exists.
@@ -24,36 +24,46 @@ CV = "tests/cross_validation/"
 UNITS = {
     CV + "test_against_inhouse.py": CV + "frictionless_runs",
     CV + "test_reactions.py": CV + "frictionless_runs",
+    CV + "test_exudyn_models.py": CV + "frictionless_runs",
 }
-#: The files (or units) that go first, in this order. The first compiles the compiled path; the next five use no
-#: compiled code (sympy, the reference path, Exudyn) and keep the other worker busy meanwhile (about 75 s of CPU
-#: on a cold cache, about as long as the compilation and the first file). Then the rest of the files that took
-#: over 3 s of CPU, or over 8 s with their child processes, in a cold run of the fast suite, longest first.
+#: The files (or units) that go first, in this order. The first compiles the compiled path; the next four use no
+#: compiled code (sympy, the reference path, Exudyn) and keep the other worker busy meanwhile (more CPU on a cold
+#: cache than the compilation and the first file). Then the rest of the files that took over 5 s in a cold run of
+#: the fast suite (tests' seconds, both workers busy), longest first, so that the short files left at the end even
+#: out the two workers.
 LEAD = (
     "tests/test_fast.py",
+    CV + "frictionless_runs",
     "tests/test_errata.py",
     CV + "test_friction_variants.py",
-    CV + "test_exudyn_models.py",
     "tests/test_coordinates.py",
-    CV + "frictionless_runs",
-    "tests/test_backend_samples.py",
-    "tests/test_solver.py",
-    "tests/test_pipeline.py",
     "tests/test_moving_friction_study.py",
+    "tests/test_solver.py",
+    "tests/test_backend_samples.py",
+    "tests/test_spatial_bricard.py",
+    "tests/test_reliability_round3.py",
     "tests/test_studies.py",
+    "tests/test_pipeline.py",
+    "tests/test_moving_guide_friction.py",
+    "tests/test_validation.py",
+    "tests/test_report.py",
     "tests/test_examples.py",
     "tests/test_friction.py",
-    "tests/test_moving_guide_friction.py",
     "tests/test_fast_pin_friction.py",
-    "tests/test_revolute_friction.py",
-    "tests/test_reliability_probe.py",
-    "tests/test_reliability_catalogue.py",
     "tests/test_bench_report.py",
-    "tests/test_report.py",
     "tests/test_reliability.py",
-    "tests/test_exudyn_pin_friction.py",
     "tests/test_free_bodies.py",
+    "tests/test_revolute_friction.py",
+    "tests/test_spatial_exudyn.py",
+    "tests/test_bench_compile_time.py",
+    "tests/test_exudyn_pin_friction.py",
+    "tests/test_reliability_catalogue.py",
+    "tests/test_spatial_joints.py",
+    "tests/test_reliability_probe.py",
     "tests/test_slider_crank_pins.py",
+    "tests/test_report_figure_cache.py",
+    "tests/test_index3.py",
+    "tests/test_friction_defaults.py",
 )
 
 

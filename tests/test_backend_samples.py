@@ -17,6 +17,25 @@ from study.simulate import simulate
 CHECK_T_END = 0.3   # [s] cut further to the twin's horizon where that is shorter
 
 PAIRS = [(cl.study, case, twin) for cl in load_case_lists() for case, twin in cl.samples]
+#: Options that change a run's numbers but not the compiled code it runs (tolerances, steps, gains, widths)
+NUMBERS = ("rtol", "atol", "step", "d", "omega", "K", "Lambda", "k", "width", "friction_eps", "output_step")
+
+
+def _path(case) -> tuple:
+    """What selects a sample's code on both paths: the mechanism, its variant and every option but NUMBERS."""
+    return (case.mechanism, case.variant, *sorted((k, v) for k, v in case.kwargs.items() if k not in NUMBERS))
+
+
+def _marked(pairs):
+    """The first pair of each code path (_path) in make test; a pair that repeats a path with other numbers runs
+    in the slow suite (make verify): test_sample_agrees_with_reference_path's first pair of that path covers its
+    claim in make test."""
+    seen, out = set(), []
+    for pair in pairs:
+        key = _path(pair[1])
+        out.append(pytest.param(*pair, id=pair[1].name, marks=[pytest.mark.slow] if key in seen else []))
+        seen.add(key)
+    return out
 
 
 def test_some_study_runs_compiled_with_samples():
@@ -28,8 +47,11 @@ def test_some_study_runs_compiled_with_samples():
         assert not set(t for _, t in cl.samples) & set(cl.cases)
 
 
-@pytest.mark.parametrize("study, case, twin", PAIRS, ids=[c.name for _, c, _ in PAIRS])
+@pytest.mark.parametrize("study, case, twin", _marked(PAIRS))
 def test_sample_agrees_with_reference_path(study, case, twin):
+    """A compiled sample and its reference-path twin agree. make test checks one pair per code path (mechanism,
+    variant, integrator, method, sgn, friction law); the pairs that repeat a path with other tolerances, steps or
+    gains are slow (make verify), each covered in make test by the first pair of its path."""
     short = {k: v for k, v in case.kwargs.items() if k != "backend"}
     t_end = min(CHECK_T_END, twin.t_end)
     fast = simulate(case.mechanism, variant=case.variant, t_end=t_end, backend="compiled", **short)

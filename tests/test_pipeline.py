@@ -14,6 +14,7 @@ from study import pipeline as pl
 from study.pipeline import execute
 from study.results import SimulationResult
 
+from shared_cache import linked_cache
 from tiny_cases import tiny  # noqa: F401  (a pytest fixture)
 
 
@@ -217,8 +218,9 @@ def test_dask_local_cluster_gives_the_same_tables(tiny, tmp_path):
 
 
 def test_interrupted_run_resumes_without_recomputing(tiny, tmp_path):
-    """SIGINT after the first saved result; the rerun reuses everything saved and completes."""
-    env = {**os.environ, "STUDY_CACHE_DIR": str(tmp_path / "cache")}
+    """SIGINT after the first saved result; the rerun reuses everything saved and completes (the saved runs in a
+    cache root of its own, the generated code and compiled kernels the usual ones)."""
+    env = {**os.environ, "STUDY_CACHE_DIR": str(linked_cache(tmp_path / "cache"))}
     cmd = [sys.executable, "-m", "study", "run", "--workers", "1", "--cases", str(tiny), "--out", str(tmp_path / "r")]
     # A shell's background job ignores SIGINT and its children inherit that; restore the default so
     # Python installs its KeyboardInterrupt handler in the child, as in an interactive Ctrl-C.

@@ -45,6 +45,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import handwritten  # noqa: E402
+from shared_cache import linked_cache  # noqa: E402
 from study import pipeline as pl  # noqa: E402
 from study.cli import main  # noqa: E402
 from study.errors import (EquationsError, NonFiniteError, ResultIntegrityError, RunBoundError,  # noqa: E402
@@ -681,15 +682,8 @@ def judge(t: Try, tmp: Path) -> tuple[str, str]:
 
 def isolate(tmp: Path) -> None:
     """The try's folder as working directory and cache root; the generated code and numba's compiled
-    kernels are shared with the usual cache (both checked on load), so a try does not compile them again."""
-    from study.model.compile import cache_dir
-
-    shared = cache_dir()
-    (tmp / "cache").mkdir()
-    for name in ("codegen", "numba"):
-        (shared / name).mkdir(parents=True, exist_ok=True)
-        (tmp / "cache" / name).symlink_to(shared / name)
-    os.environ["STUDY_CACHE_DIR"] = str(tmp / "cache")
+    kernels are shared with the usual cache (tests/shared_cache.py), so a try does not compile them again."""
+    os.environ["STUDY_CACHE_DIR"] = str(linked_cache(tmp / "cache"))
     os.environ.pop("STUDY_TRACEBACK", None)
     os.chdir(tmp)
 

@@ -1,10 +1,11 @@
 """Exudyn's frictionless runs that test_against_inhouse.py and test_reactions.py both compare (the quick-return
-through its first cut at the same steps with both solvers): each run is made once per test process.
+through its first cut at the same steps with both solvers), and whose index-2 drift test_exudyn_models.py checks:
+each run is made once per test process.
 
 The two files compare them on different grids: test_against_inhouse.py every FINE_STEP, test_reactions.py every
 0.01 s, the sampling of its reference. A shared run is sampled every FINE_STEP, and the comparison on common samples
 (study.compare.common_samples) reads every second one: the same numbers as a run sampled every 0.01 s, since
-Exudyn's output step does not change its steps. The scheduler (tests/scheduling.py) runs the two files on one worker,
+Exudyn's output step does not change its steps. The scheduler (tests/scheduling.py) runs the three files on one worker,
 so the cache is shared.
 """
 

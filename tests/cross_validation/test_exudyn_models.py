@@ -13,6 +13,7 @@ import re
 import numpy as np
 import pytest
 
+from cross_validation.frictionless_runs import FINE_STEP, frictionless_run
 from study import mechanisms
 from study.exudyn_models import ExudynModelError, initial_accelerations, run
 from study.exudyn_models import settings as common
@@ -78,11 +79,12 @@ def test_index3_keeps_inhouse_phi_at_round_off(name, variant):
 
 def test_index2_drift_is_not_round_off_and_shrinks_at_order_two():
     """Index 2 enforces velocity constraints only: Phi drifts, by O(h^2) (the integrated O(h^2)
-    velocity-level error), through the first cut at the steps that resolve the smooth law."""
-    ps = load_parameters("quick_return", "smooth_cutting")
+    velocity-level error), through the first cut at the steps that resolve the smooth law. The runs (the variant
+    has no friction) are test_against_inhouse.py's, made once (frictionless_runs.py)."""
     h = tol("cut_steps")
     steps = [h, h / 2, h / 4]
-    drift = [np.abs(run(ps, tol("cut_window"), s, solver="index2", output_step=0.01).phi).max() for s in steps]
+    drift = [np.abs(frictionless_run("quick_return", "smooth_cutting", tol("cut_window"), s, "index2",
+                                     FINE_STEP).phi).max() for s in steps]
     assert min(drift) > 1e3 * tol("phi_roundoff"), drift
     p = observed_orders(drift)
     assert np.all(p >= tol("min_order")), f"drift {drift}, orders {p}"
