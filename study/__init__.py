@@ -1,8 +1,9 @@
 """Reproducible validation study of redundant-coordinate multibody methods against Exudyn.
 
 The public way in: a :class:`Description` (bodies, joints, loads) and its parameters make a :class:`Mechanism`
-(``study.model``; the study's own mechanisms come from the registry ``study.mechanisms.CATALOGUE``); a run
-specification says how to run it, :class:`InHouse` (stabilization method, integrator, friction treatment, backend)
+(``study.model``; a spatial description makes a ``study.spatial.SpatialMechanism``; the study's own mechanisms come
+from the registries ``study.mechanisms.CATALOGUE`` and ``study.spatial.catalogue.SPATIAL`` through one lookup,
+``study.mechanisms.named_mechanism``); a run specification says how to run it, :class:`InHouse` (stabilization method, integrator, friction treatment, backend)
 or :class:`Exudyn` (solver, step); ``run(mechanism, spec, t_end)`` returns a :class:`SimulationResult` for every
 engine. ``simulate`` and ``exudyn_run`` are the same runs by keyword arguments.
 

@@ -82,8 +82,10 @@ def method_options(items: list[str] | None, method: str) -> dict:
 def _simulate(args: argparse.Namespace) -> int:
     from study.progress import ProgressPrinter
     from study.results import check_save_target
-    from study.simulate import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments, default_friction, resolve, \
-        simulate
+    from study.engines.runner import resolve
+    from study.friction_default import default_friction
+    from study.run_arguments import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments
+    from study.simulate import simulate
 
     out = arguments.output_path("--out", args.out)
     options = method_options(args.option, args.method)
@@ -217,9 +219,9 @@ def _verify_command(sub) -> None:
 
 
 def _mechanism_help() -> str:
-    from study.params import available_mechanisms
+    from study.mechanisms import names
 
-    return (f"a study mechanism ({', '.join(available_mechanisms())}) or your own mechanism's .py file (describe(ps), "
+    return (f"a study mechanism ({', '.join(names())}) or your own mechanism's .py file (describe(ps), "
             f"its parameters in a .toml beside it)")
 
 
@@ -228,7 +230,8 @@ def _simulate_command(sub) -> None:
     from study.solver.accelerations import ACCELERATION_SOLVERS
     from study.solver.stabilization import SIGN_FUNCTIONS, STABILIZATIONS
 
-    from study.simulate import BACKENDS, DEFAULT_OUTPUT_STEP, FIXED_STEP, INTEGRATOR_NAMES, simulate
+    from study.run_arguments import BACKENDS, DEFAULT_OUTPUT_STEP, FIXED_STEP, INTEGRATOR_NAMES
+    from study.simulate import simulate
     from study.solver.friction import DEFAULT_EPS, FRICTION_TREATMENTS
 
     defaults = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}

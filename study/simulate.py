@@ -8,15 +8,11 @@ from typing import Callable
 from study.engines.inhouse import InHouse
 from study.engines.runner import resolve, run
 from study.model.eom import EquationsOfMotion
-from study.friction_default import default_friction, friction_entries
 from study.results import SimulationResult
-from study.run_arguments import (BACKENDS, DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, FIXED_STEP, INTEGRATOR_NAMES,
-                                 check_arguments, check_run_size)
-from study.solver.run import build_dynamics
+from study.run_arguments import DEFAULT_FRICTION, DEFAULT_OUTPUT_STEP, check_arguments
 from study.solver.stabilization import Stabilization
 
-__all__ = ["BACKENDS", "DEFAULT_FRICTION", "DEFAULT_OUTPUT_STEP", "FIXED_STEP", "INTEGRATOR_NAMES", "build_dynamics",
-           "check_run_size", "default_friction", "friction_entries", "resolve", "simulate", "simulate_methods"]
+__all__ = ["simulate", "simulate_methods"]
 
 
 def simulate(

@@ -367,8 +367,3 @@ def main_verify(reports_dir: Path, cache_root: Path, studies: Sequence[str] | No
         snapshot = copy_snapshot(Path(reports_dir) / "tables", Path(tmp) / "tables")
         ok, _ = verify_tables(snapshot, cache_root, studies, workers, cases_dir)
     return 0 if ok else 1
-
-
-def check_rules_cover(frames: Mapping[str, pd.DataFrame], rules_path: Path = RULES_PATH) -> list[str]:
-    """Columns that fall back to the default rule (for a test: every published column has a stated rule)."""
-    return [f"{t}.{c}" for t, f in frames.items() for c in f.columns if rule_for(t, c, rules_path).name == "default"]

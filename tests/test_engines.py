@@ -159,3 +159,32 @@ def test_every_committed_case_is_a_spec_that_round_trips():
         spec = spec_from_dict({"engine": case.engine, **options})
         assert spec.engine == case.engine
         assert spec_from_dict(spec.to_dict()) == spec, case.name
+
+
+def test_a_mechanism_name_is_found_as_the_pipeline_finds_it():
+    """study.simulate and study.run look a name up through named_mechanism, as a case list does: a spatial study
+    mechanism by name runs (it was 'unknown mechanism' through the planar parameter files alone)."""
+    r = study.simulate("heavy_top", t_end=0.01, integrator="DOP853", rtol=1e-8, atol=1e-10, output_step=0.005)
+    assert r.meta["mechanism"] == "heavy_top" and len(r.t) == 3
+    assert study.run("heavy_top", InHouse(integrator=DOP853(rtol=1e-8, atol=1e-10), output_step=0.005),
+                     0.01).q.shape == r.q.shape
+    with pytest.raises(ValueError, match="unknown mechanism 'nowhere'"):
+        study.simulate("nowhere", t_end=0.01)
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: Baumgarte(d="x"), r"d = 'x' must be a number"),
+    (lambda: Projection(max_iter=2.5), r"max_iter = 2.5 must be a whole number"),
+])
+def test_a_public_method_constructor_names_a_bad_value(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
+def test_a_mechanism_refuses_parameters_that_are_not_a_parameter_set():
+    d = study.Description("pendulum", ["th"], {"m": 1.0, "l": 1.0})
+    d.ground("O", 0, 0)
+    d.body("bar", d.p.m, d.p.m * d.p.l ** 2 / 12, {"O": (-d.p.l / 2, 0)}, angle=d.q[0])
+    d.revolute("O", (study.GROUND, "O"), ("bar", "O"))
+    with pytest.raises(TypeError, match=r"parameters = \{'m': 1.0\} must be a ParameterSet"):
+        study.Mechanism(d, {"m": 1.0})

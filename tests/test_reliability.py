@@ -15,7 +15,8 @@ from study import pipeline as pl
 from study.cli import main
 from study.progress import ProgressPrinter
 from study.reference_data import tolerance
-from study.simulate import check_run_size, simulate
+from study.run_arguments import check_run_size
+from study.simulate import simulate
 from study.solver.checks import SingularityMonitor, singularity_measure
 
 from tiny_cases import TINY

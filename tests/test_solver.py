@@ -82,7 +82,7 @@ def test_sliding_mode_exact_sign_with_rk4_on_quick_return():
 def test_on_off_switches_are_located():
     """Each switch is an event; at the event the switching function that crossed is zero to round-off,
     evaluated on the state the integrator restarts from, and the others keep their signs."""
-    from study.simulate import build_dynamics
+    from study.solver.run import build_dynamics
     from study.solver.integrate import integrate
 
     ps, eom = load("quick_return", "seed")
@@ -238,7 +238,7 @@ def test_switches_located_at_loose_tolerances(method, integrator, rtol, t_end):
     sample's state (with projection the sample is projected after the mode is read, which may move it
     across a surface by the projection's correction); every switch of an accurate run (DOP853 at the
     reference tolerance) must have been located."""
-    from study.simulate import build_dynamics
+    from study.solver.run import build_dynamics
     from study.solver.integrate import integrate
 
     ps, eom = load("quick_return", "seed")

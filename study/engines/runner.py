@@ -30,13 +30,13 @@ def _spatial_model(mechanism, t_end: float, **options) -> SimulationResult:
 #: a mechanism's kind (:attr:`study.Mechanism.kind`; a study mechanism's ParameterSet is planar) -> its Exudyn
 #: translator's ``run(mechanism, t_end, **Exudyn.options())`` (Exudyn is imported when a run needs it)
 EXUDYN_TRANSLATORS = {"planar": _planar_model, "spatial": _spatial_model}
-#: a mechanism's kind -> in-house backend -> why it does not run that kind yet
+
+
 def resolve(eom_or_mechanism, variant: str | None = None):
     """An EquationsOfMotion, a Mechanism (a description with its parameter set) or a built-in mechanism name (with
     its variant) -> (eom, mechanism or None)."""
-    from study.mechanisms import mechanism
+    from study.mechanisms import named_mechanism
     from study.model import Mechanism
-    from study.params import load_parameters
 
     if isinstance(eom_or_mechanism, (EquationsOfMotion, Mechanism)) and variant is not None:
         raise ValueError(f"variant= applies to built-in mechanism names, not to a {type(eom_or_mechanism).__name__} "
@@ -46,7 +46,7 @@ def resolve(eom_or_mechanism, variant: str | None = None):
     if isinstance(eom_or_mechanism, Mechanism):
         return eom_or_mechanism.equations(), eom_or_mechanism
     if isinstance(eom_or_mechanism, str):
-        m = mechanism(load_parameters(eom_or_mechanism, variant or "seed"))
+        m = named_mechanism(eom_or_mechanism, variant or "seed")   # as the pipeline finds it: planar, spatial, a file
         return m.equations(), m
     raise ValueError(f"eom_or_mechanism = {eom_or_mechanism!r} must be an EquationsOfMotion, a Mechanism or a "
                      f"mechanism name")

@@ -62,11 +62,6 @@ def unit(a: float) -> Array:
     return np.array([math.cos(a), math.sin(a)])
 
 
-def unit_normal(a: float) -> Array:
-    """d unit(a) / da = unit(a + pi/2)."""
-    return np.array([-math.sin(a), math.cos(a)])
-
-
 @dataclass
 class Model:
     """An Exudyn system under construction, with named bodies, joints and sensors.

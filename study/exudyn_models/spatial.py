@@ -339,10 +339,14 @@ def run(mechanism, t_end: float, h: float, solver: str = "index3", output_step: 
         newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
     """:func:`run_spatial` of a :class:`study.spatial.SpatialMechanism` from its consistent initial state, with the
     options of :func:`study.exudyn_models.run` (``study.run(mechanism, Exudyn(...), t_end)`` calls it for a spatial
-    mechanism); ``friction`` 'regularized' or 'none' (FRICTIONLESS), ``eps`` then unused."""
+    mechanism); ``friction`` 'regularized' or 'none' (FRICTIONLESS) and ``eps`` its default: a spatial description
+    has no friction entries yet, so another width is refused rather than ignored."""
     if friction not in FRICTIONLESS:
         raise ValueError(f"friction = {friction!r}: {mechanism.name} is spatial and has no friction entries; "
                          f"valid choices: {', '.join(FRICTIONLESS)}")
+    if eps != settings.DEFAULT_EPS:
+        raise ValueError(f"eps = {eps!r}: {mechanism.name} is spatial and has no friction entries for a width to "
+                         f"apply to; leave eps at its default {settings.DEFAULT_EPS}")
     state = mechanism.initial_state()
     return run_spatial(mechanism.description, mechanism.equations(), state.q, state.qd, t_end, h, solver,
                        output_step, configuration, ignore_singular, linear_solver, newton_tolerance)

@@ -27,8 +27,8 @@ __all__ = ["CompiledModel", "compiled_model", "compiled_rhs", "simulate_compiled
 
 
 def __getattr__(name: str):
-    """The frontend's names, imported when first asked for: the compiled forms of the stabilization methods and
-    friction treatments (study.solver) import study.kernels.signs and .signatures, and the frontend imports them."""
+    """The frontend's names, imported when first asked for: the cache folder is checked before the entry kernels
+    compile or load, and ``import study`` does not load the compiled path until a run needs it."""
     if name in __all__:
         _cache.check()   # a cache folder that cannot be used is refused before the entry kernels compile or load
         from study.fast import frontend

@@ -1,6 +1,6 @@
 """Python side of the compiled path: what it supports, packing of options, segments and events, result.
 
-``simulate(..., backend='compiled')`` calls :func:`simulate_compiled`. It supports the described
+An in-house run on backend 'compiled' (``study.engines.inhouse_run.run_inhouse``) calls :func:`simulate_compiled`. It supports the described
 mechanisms (kernels generated from their description) and a user's EquationsOfMotion whose callables
 numba compiles (:mod:`study.fast.user`, which names what it cannot compile), the ``multiplier`` acceleration solver,
 every stabilization (none, baumgarte, sliding_mode with every sgn approximation, projection),
@@ -374,8 +374,8 @@ def simulate_compiled(eom: EquationsOfMotion, mechanism, q0, qd0, t_end: float, 
                       integrator: str, rtol: float, atol: float, step, output_step: float,
                       acceleration_solver: str, progress, friction, friction_eps: float, friction_sgn: str,
                       max_evaluations: float, min_step: float, **method_options) -> SimulationResult:
-    """The compiled backend of ``study.simulate.simulate`` (arguments already checked there; what the compiled
-    backend supports again here, for a direct call)."""
+    """The compiled backend of an in-house run (arguments already checked by its ``InHouse`` specification; what
+    the compiled backend supports checked again here, for a direct call)."""
     check_supported(integrator, acceleration_solver, progress)
     s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)

@@ -47,14 +47,6 @@ def tableau(method: str) -> tuple:
 
 
 @internal()
-def rms(v):
-    s = 0.0
-    for x in v:
-        s += x * x
-    return math.sqrt(s / v.size)
-
-
-@internal()
 def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol, atol, mode, p, lp, ci, cf, ws, tmp,
                         f1):
     """scipy.integrate._ivp.common.select_initial_step (Hairer, Norsett & Wanner II.4)."""

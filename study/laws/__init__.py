@@ -1,7 +1,9 @@
 """The numerical laws of the in-house solver, each written once for both backends.
 
-Every law here is a plain function on numbers and arrays, compiled with numba (``study.kernels``) for the compiled
-loop and called (compiled, or through the same source) by the reference loop. Neither ``study.solver`` (the
+Every law here is a plain function on numbers and arrays: compiled with numba (``study.kernels``) for the compiled
+loop and called (compiled, or through the same source) by the reference loop; or, for the run's bookkeeping between
+segments (``events.crossing_finder`` built on a Python function, ``modes.initial_mode``, ``modes.switch``), plain
+Python that both loops call. Neither ``study.solver`` (the
 reference path) nor ``study.fast`` (the compiled path) defines a law of its own; both import them from here.
 
 The homes, one module per law:

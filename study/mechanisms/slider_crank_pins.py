@@ -29,7 +29,7 @@ from study.params import ParameterSet
 LABEL = "slider-crank with friction in its pins (paper 000's data)"
 PINS = tuple(slider_crank.PIN_ENDS)
 #: The paper mechanism's entries (inherited from its file), each pin's radius and coefficient, and the friction treatment
-#: a run takes unless told otherwise (read by study.simulate.default_friction).
+#: a run takes unless told otherwise (read by study.friction_default.default_friction).
 PARAMETERS = (slider_crank.PARAMETERS + tuple(f"r_{p}" for p in PINS) + tuple(f"mu_{p}" for p in PINS)
               + ("friction_treatment",))
 COORDINATES = ("x1", "y1", "th1", "x2", "y2", "th2", "x3", "y3")

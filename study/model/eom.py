@@ -1,12 +1,12 @@
 """The numeric equations-of-motion interface at the centre of the solver.
 
-A planar mechanism in m redundant coordinates q with r holonomic constraints::
+A mechanism, planar or spatial, in m redundant coordinates q with r holonomic constraints::
 
     M(q) q'' + Phi_q(q)^T lambda = Q(t, q, q')
     Phi(q) = 0,   Phi_q q'' = gamma(q, q'),   gamma = -(Phi_q q')_q q'
 
-The solver only ever sees this object. It can come from :class:`study.model.MechanismBuilder`
-or be written by hand from plain callables.
+The solver only ever sees this object. It comes from a :class:`study.model.Mechanism` (a planar description's
+generated equations) or a spatial description (:mod:`study.spatial`), or is written by hand from plain callables.
 """
 
 from __future__ import annotations

@@ -72,6 +72,10 @@ class Mechanism:
                                  f"q0={{...}} (and qd0), or a parameter set")
             d = self.description
             object.__setattr__(self, "parameters", inline_parameters(d.name, d.values, d.coordinate_names, q0, qd0))
+        elif not isinstance(self.parameters, ParameterSet):
+            raise TypeError(f"Mechanism({self.description.name}): parameters = {self.parameters!r} must be a "
+                            f"ParameterSet (study.load_parameters); a description's own values need none: give the "
+                            f"initial state as q0={{...}}, qd0={{...}}")
         elif q0 is not None or qd0 is not None:
             raise ValueError(f"Mechanism({self.description.name}): q0/qd0 and a parameter set both give the initial "
                              f"state; the parameter set's is in its [initial_conditions]: give one of them")

@@ -361,7 +361,7 @@ def sample_horizon(case: Case) -> float:
     reasons assume (reference/tolerances.toml), and then down to a whole number of output steps, so that every sample of the
     twin is a sample of the case."""
     from study.reference_data import tolerance
-    from study.simulate import DEFAULT_OUTPUT_STEP
+    from study.run_arguments import DEFAULT_OUTPUT_STEP
 
     step = case.kwargs.get("step")
     limit = tolerance("backend_sample_horizon") if step is None else tolerance("backend_sample_steps") * float(step)

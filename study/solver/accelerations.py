@@ -54,11 +54,6 @@ class AccelerationSolver:
         return {}
 
 
-def _multipliers_from_residual(J: Array, residual: Array) -> Array:
-    """lambda with J^T lambda = residual (= Q - M qdd), by least squares on the range of J^T."""
-    return np.linalg.lstsq(J.T, residual, rcond=None)[0]
-
-
 class Multiplier(AccelerationSolver):
     """Augmented saddle-point form [[M, J^T], [J, 0]] [qdd; lambda] = [Q; c]."""
 

@@ -41,8 +41,12 @@ Array = np.ndarray
 
 
 def _positive(owner: str, **values: float) -> None:
+    """Each value a finite positive number (or array of them), else one ValueError naming it."""
     for key, value in values.items():
-        arr = np.atleast_1d(np.asarray(value, dtype=float))
+        try:
+            arr = np.atleast_1d(np.asarray(value, dtype=float))
+        except (TypeError, ValueError):
+            raise ValueError(f"{owner}: {key} = {value!r} must be a number (finite and > 0)") from None
         if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
             raise ValueError(f"{owner}: {key} = {value!r} must be finite and > 0")
 
@@ -173,6 +177,8 @@ class Projection(Stabilization):
         if self.weighting not in ("minimum_norm", "mass"):
             raise ValueError(f"projection: weighting {self.weighting!r}; valid choices: minimum_norm, mass")
         _positive("projection", tol=self.tol, max_iter=self.max_iter)
+        if isinstance(self.max_iter, bool) or int(self.max_iter) != self.max_iter:
+            raise ValueError(f"projection: max_iter = {self.max_iter!r} must be a whole number of iterations")
 
     def compiled_parameters(self, r):
         """The number the projection reads at the bias parameters (``study.fast.project``): its ``rcond``."""

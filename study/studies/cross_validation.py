@@ -60,9 +60,6 @@ Array = np.ndarray
 
 ROLES = ("reference", "exudyn", "inhouse")
 
-AGREEMENT_KEYS = ["mechanism", "variant", "friction", "t_end", "engine", "solver", "h"]
-
-
 # --------------------------------------------------------------------------------------------
 # quantities compared
 # --------------------------------------------------------------------------------------------

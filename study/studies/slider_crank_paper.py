@@ -116,15 +116,6 @@ def paper_method(v, q, qd, s: float, sigma: float) -> PaperSolution:
     return PaperSolution(x[:2], N, float(-s * (v.F + v.mu * sigma * N)), bool(sigma * N >= 0))
 
 
-def paper_method_consistent(v, q, qd, s: float) -> PaperSolution:
-    """The consistent sign hypothesis of :func:`paper_method` (exactly one expected; else ValueError)."""
-    sols = [paper_method(v, q, qd, s, sigma) for sigma in (1.0, -1.0)]
-    good = [p for p in sols if p.consistent]
-    if len(good) != 1 and not (len(good) == 2 and abs(good[0].normal) < 1e-12 * (1 + abs(good[1].normal))):
-        raise ValueError(f"{len(good)} consistent signs of N at q = {list(q)}, qd = {list(qd)}, s = {s}")
-    return good[0]
-
-
 def holding_forces(v, q) -> dict[str, float]:
     """Static balance of the stuck mechanism at q (qd = 0), from 000's D = [1, d12].
 

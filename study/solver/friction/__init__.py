@@ -12,14 +12,13 @@ One module per concept:
 The names below are re-exported, so ``from study.solver.friction import FrictionDynamics`` works.
 """
 
-from study.laws.contact import CONSISTENCY_RTOL
 from study.solver.friction.contact import ContactSolution, FrictionDynamics, PainleveError, PinFrictionError
 from study.solver.friction.laws import (DEFAULT_EPS, FRICTION_TREATMENTS, RESISTANCE_READINGS, ExactCoulomb,
                                         PlainSign, RegularizedCoulomb, make_friction)
 from study.solver.friction.switching import FrictionLawError, StickSlipSwitching
 
 __all__ = [
-    "CONSISTENCY_RTOL", "DEFAULT_EPS", "FRICTION_TREATMENTS", "RESISTANCE_READINGS", "ContactSolution",
+    "DEFAULT_EPS", "FRICTION_TREATMENTS", "RESISTANCE_READINGS", "ContactSolution",
     "ExactCoulomb", "FrictionDynamics", "FrictionLawError", "PainleveError", "PinFrictionError", "PlainSign",
     "RegularizedCoulomb",
     "StickSlipSwitching", "make_friction",
