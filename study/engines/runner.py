@@ -46,7 +46,9 @@ def resolve(eom_or_mechanism, variant: str | None = None):
     if isinstance(eom_or_mechanism, Mechanism):
         return eom_or_mechanism.equations(), eom_or_mechanism
     if isinstance(eom_or_mechanism, str):
-        m = named_mechanism(eom_or_mechanism, variant or "seed")   # as the pipeline finds it: planar, spatial, a file
+        # found as the pipeline finds it (planar, spatial, a file), but built afresh: a run reads the cache folder of
+        # the moment (STUDY_CACHE_DIR) for its generated equations, never a mechanism memoized by an earlier call
+        m = named_mechanism.__wrapped__(eom_or_mechanism, variant or "seed")
         return m.equations(), m
     raise ValueError(f"eom_or_mechanism = {eom_or_mechanism!r} must be an EquationsOfMotion, a Mechanism or a "
                      f"mechanism name")
