@@ -22,8 +22,8 @@ import numpy as np
 import sympy as sp
 
 from study.reference_data import tolerance
-from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute,
-                                    RigidBody, SpatialDescriptionError, Spherical, TorqueLoad, Universal)
+from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, JointFriction, PointLoad, Prismatic,
+                                    Revolute, RigidBody, SpatialDescriptionError, Spherical, TorqueLoad, Universal)
 
 FRAMES = ("global", "body")
 
@@ -116,6 +116,7 @@ class SpatialDescription:
         self.bodies: dict[str, RigidBody] = {}
         self.joints: list[Spherical | Revolute | FixedJoint | Prismatic | Cylindrical | Universal | Distance] = []
         self.loads: list[PointLoad | TorqueLoad] = []
+        self.frictions: dict[str, JointFriction] = {}
         self.gravity_vector = np.zeros(3)
         self.redundant = 0
         self.redundancy_reason = ""
@@ -218,6 +219,40 @@ class SpatialDescription:
                                           f"spherical joint, whose row |d| - 0 has no gradient)")
         self.joints.append(Distance(name, *pair, length=float(value)))
 
+    def friction(self, joint: str, mu_static: float, mu_kinetic: float, resistance: float = 0.0,
+                 radius: float | None = None) -> None:
+        """Coulomb friction in the revolute or prismatic joint ``joint`` (declared before): the law is
+        :class:`~study.spatial.elements.JointFriction`'s. A revolute needs its pin ``radius`` [m] (> 0), a prismatic
+        joint has none; 0 <= mu_kinetic <= mu_static, resistance >= 0."""
+        kinds = {j.name: j for j in self.joints}
+        if joint not in kinds:
+            raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r}: no such joint (joints: "
+                                          f"{sorted(kinds)})")
+        if type(kinds[joint]) not in (Revolute, Prismatic):
+            raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r}: a {type(kinds[joint]).__name__} "
+                                          f"joint has no friction law here (only revolute and prismatic joints)")
+        if joint in self.frictions:
+            raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r} is given twice")
+        values = {key: real_vector([value], 1, f"{key} of the friction in joint {joint!r}")[0]
+                  for key, value in (("mu_static", mu_static), ("mu_kinetic", mu_kinetic),
+                                     ("resistance", resistance))}
+        if not 0 <= values["mu_kinetic"] <= values["mu_static"] or values["resistance"] < 0:
+            raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r}: needs 0 <= mu_kinetic "
+                                          f"({mu_kinetic!r}) <= mu_static ({mu_static!r}) and resistance "
+                                          f"({resistance!r}) >= 0")
+        revolute = isinstance(kinds[joint], Revolute)
+        if revolute != (radius is not None):
+            raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r}: radius = {radius!r}: "
+                                          + ("a revolute joint needs its pin radius [m]" if revolute else
+                                             "a prismatic joint's friction has no radius (its normal force is N)"))
+        if revolute:
+            radius = real_vector([radius], 1, f"radius of the friction in joint {joint!r}")[0]
+            if not radius > 0:
+                raise SpatialDescriptionError(f"{self.name}: friction in joint {joint!r}: radius = {radius!r} must "
+                                              f"be > 0")
+            radius = float(radius)
+        self.frictions[joint] = JointFriction(joint, *(float(v) for v in values.values()), radius=radius)
+
     def redundant_rows(self, count: int, reason: str) -> None:
         """Declare ``count`` joint rows dependent at every configuration (Bricard's linkage: 1; ``reason`` says why):
         rank(Phi_q) = r - count, checked at the initial state (:func:`study.spatial.initial.initial_state`)."""
@@ -262,4 +297,5 @@ class SpatialDescription:
         parts = [("body", plain(dataclasses.asdict(b))) for b in self.bodies.values()]
         parts += [(type(e).__name__, plain(dataclasses.asdict(e))) for e in (*self.joints, *self.loads)]
         parts += [("gravity", plain(self.gravity_vector)), ("redundant", self.redundant, self.redundancy_reason)]
+        parts += [("friction", plain(dataclasses.asdict(f))) for f in self.frictions.values()]
         return hashlib.sha256(repr((self.name, parts)).encode()).hexdigest()[:16]

@@ -11,8 +11,8 @@ import sympy as sp
 
 from study.model.elements import GROUND, DescriptionError
 
-__all__ = ["GROUND", "AxisPair", "Cylindrical", "Distance", "FixedJoint", "PointLoad", "Prismatic", "Revolute",
-           "RigidBody", "SpatialDescriptionError", "Spherical", "TorqueLoad", "Universal"]
+__all__ = ["GROUND", "AxisPair", "Cylindrical", "Distance", "FixedJoint", "JointFriction", "PointLoad", "Prismatic",
+           "Revolute", "RigidBody", "SpatialDescriptionError", "Spherical", "TorqueLoad", "Universal"]
 
 Vector = tuple[float, float, float]
 
@@ -111,6 +111,29 @@ class Distance:
     body_b: str
     b: str | Vector
     length: float
+
+
+@dataclass(frozen=True)
+class JointFriction:
+    """Coulomb friction in the spatial joint ``joint`` (a revolute or a prismatic joint).
+
+    * revolute: a torque about the axis, tau = -(mu_kinetic radius |R_t|_delta + resistance) s(omega_rel) on body a
+      and -tau on body b; R_t is the joint's transverse reaction (the force component perpendicular to its axis),
+      omega_rel the relative angular velocity about the axis, ``radius`` [m] the pin's radius;
+    * prismatic: a force along the axis, f = -(mu_kinetic |N|_delta + resistance) s(v_rel) on point a and -f on
+      body b; N is the normal reaction, the 2-vector of the joint's two transverse rows (``_tx``, ``_ty``), v_rel the
+      velocity of point a relative to body b along the axis; ``radius`` is None (the rotation lock's reaction
+      moments add no friction).
+
+    At rest the joint holds up to the same level with ``mu_static`` (the exact treatment). |.|_delta is the smooth
+    norm of the planar pins (``pin_friction_norm_width`` in reference/tolerances.toml); ``resistance`` a constant
+    torque [N m] (revolute) or force [N] (prismatic)."""
+
+    joint: str
+    mu_static: float
+    mu_kinetic: float
+    resistance: float = 0.0
+    radius: float | None = None
 
 
 @dataclass(frozen=True)
