@@ -1,8 +1,9 @@
 """Time to the first result of each path, from a fresh process, with a cold and a warm cache.
 
-One measurement is one child process that produces one short quick-return result: the command line's
-``simulate quick_return --t-end 1`` on the reference path or the compiled path, or one Exudyn run of the same
-mechanism. Cold: the child's cache folder (``STUDY_CACHE_DIR``) is empty, so it generates and compiles everything
+One measurement is one child process that produces one short result of one mechanism (:data:`MECHANISMS`: the
+planar quick-return mechanism and two spatial ones, the heavy top and the spatial slider-crank): the command line's
+``simulate <mechanism> --t-end 1`` on the reference path or the compiled path, or one Exudyn run of the same
+mechanism (``study.run`` with ``study.Exudyn(h=1e-3)``). Cold: the child's cache folder (``STUDY_CACHE_DIR``) is empty, so it generates and compiles everything
 it needs (sympy derivation, numba kernels); warm: a second child on the same folder. The numbers are the child's
 wall time seen from here and its CPU time (user + system, from its resource usage): on a shared machine the wall
 time varies with the load, the CPU time much less. Each is repeated (``repeats``, a fresh cold folder each time)
@@ -29,13 +30,14 @@ import pandas as pd
 from study.bench.harness import log
 
 T_END = 1.0   # [s] simulated: the run itself takes a few milliseconds; the rest is start-up and compilation
+#: the mechanisms measured: a planar one, a spatial one of one body and one of three bodies and four joint kinds
+MECHANISMS = ("quick_return", "heavy_top", "spatial_slider_crank")
 
 
-def commands(out: Path, t_end: float = T_END) -> dict[str, list[str]]:
+def commands(out: Path, t_end: float = T_END, mechanism: str = "quick_return") -> dict[str, list[str]]:
     """The child process of each path (arguments after the interpreter), ``t_end`` [s] simulated."""
-    cli = ["-m", "study", "simulate", "quick_return", "--t-end", str(t_end), "--out", str(out)]
-    exudyn = ("from study.exudyn_models import run; from study.params import load_parameters; "
-              f"run(load_parameters('quick_return', 'seed'), {t_end}, 1e-3)")
+    cli = ["-m", "study", "simulate", mechanism, "--t-end", str(t_end), "--out", str(out)]
+    exudyn = f"import study; study.run({mechanism!r}, study.Exudyn(h=1e-3), {t_end})"
     return {"reference": [*cli, "--backend", "reference"], "compiled": [*cli, "--backend", "compiled"],
             "exudyn": ["-c", exudyn]}
 
@@ -53,8 +55,9 @@ def child(argv: list[str], cache: Path) -> tuple[float, float]:
 
 
 def compile_time(repeats: int = 2, paths: tuple[str, ...] = ("reference", "compiled", "exudyn"),
-                 pace: float | None = None, t_end: float = T_END) -> pd.DataFrame:
-    """One row per path, cache state (cold, warm) and repeat: the first result's wall and CPU seconds, this host's
+                 pace: float | None = None, t_end: float = T_END,
+                 mechanisms: tuple[str, ...] = MECHANISMS) -> pd.DataFrame:
+    """One row per mechanism, path, cache state (cold, warm) and repeat: the first result's wall and CPU seconds, this host's
     pace [µs per evaluation] (``pace``, else measured here by :func:`study.bench.evaluations.pace_us`) and the CPU
     scaled to a pace of 1 µs."""
     if pace is None:
@@ -63,15 +66,16 @@ def compile_time(repeats: int = 2, paths: tuple[str, ...] = ("reference", "compi
         pace = pace_us()
     rows = []
     for repeat in range(repeats):
-        with tempfile.TemporaryDirectory(prefix="study_compile_time_") as tmp:
-            for path in paths:
-                argv = commands(Path(tmp) / f"{path}_result", t_end)[path]
-                cache = Path(tmp) / f"{path}_cache"
-                for state in ("cold", "warm"):
-                    wall, cpu = child(argv, cache)
-                    rows.append({"path": path, "cache": state, "mechanism": "quick_return", "repeat": repeat,
-                                 "first_call_wall_s": wall, "cpu_s": cpu, "pace_us": pace,
-                                 "cpu_s_at_pace_1us": cpu / pace})
-                    log(f"compile: {path} path, {state} cache, repeat {repeat}: {wall:.1f} s wall, {cpu:.1f} s CPU "
-                        f"({cpu / pace:.1f} s at a pace of 1 µs; this host's: {pace:.3g} µs)")
+        for mechanism in mechanisms:
+            with tempfile.TemporaryDirectory(prefix="study_compile_time_") as tmp:
+                for path in paths:
+                    argv = commands(Path(tmp) / f"{path}_result", t_end, mechanism)[path]
+                    cache = Path(tmp) / f"{path}_cache"
+                    for state in ("cold", "warm"):
+                        wall, cpu = child(argv, cache)
+                        rows.append({"path": path, "cache": state, "mechanism": mechanism, "repeat": repeat,
+                                     "first_call_wall_s": wall, "cpu_s": cpu, "pace_us": pace,
+                                     "cpu_s_at_pace_1us": cpu / pace})
+                        log(f"compile: {mechanism}, {path} path, {state} cache, repeat {repeat}: {wall:.1f} s wall, "
+                            f"{cpu:.1f} s CPU ({cpu / pace:.1f} s at a pace of 1 µs; this host's: {pace:.3g} µs)")
     return pd.DataFrame(rows)
