@@ -163,3 +163,25 @@ def report_subsection(tables: dict[str, pd.DataFrame], folder) -> list[str]:
         frame.to_csv(folder / "tables" / f"{name}.csv", index=False)
         record_written(folder / "tables" / f"{name}.csv", "written by the test")
     return _bricard_peer(ReportContext(reports_dir=folder, store=None, case_lists={}))
+
+
+@pytest.mark.slow
+def test_the_same_motion_as_a04_in_other_body_frames(runs):
+    """The file's body frames turn every rod, A04's (study.spatial.bricard) keep them parallel to the global frame:
+    the same mechanism, so the four joints between rods move alike, both runs within the global-error rule."""
+    from study.simulate import simulate
+    from study.spatial.bricard import bricard_mechanism
+
+    case, peer = next((c, r) for c, r in runs.items() if c.engine == "inhouse")
+    a04 = bricard_mechanism()
+    eom, state, o = a04.equations(), a04.initial_state(), case.kwargs
+    ours = simulate(eom, state.q, state.qd, t_end=case.t_end, integrator=o["integrator"], rtol=o["rtol"],
+                    atol=o["atol"], output_step=o["output_step"], acceleration_solver=o["acceleration_solver"])
+    peer_eom = named_mechanism(BRICARD).equations()
+
+    def heads(e, q):
+        return np.array([[np.ravel(e.points[f"rod{k}.head"](x)) for k in range(1, 5)] for x in q])
+
+    assert ours.t.shape == peer.t.shape
+    bound = 2 * tolerance("adaptive_global_error_factor") * o["rtol"] * L
+    assert np.abs(heads(peer_eom, peer.q) - heads(eom, ours.q)).max() <= bound
