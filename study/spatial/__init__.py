@@ -9,6 +9,7 @@
 * :mod:`~study.spatial.mechanism`: :class:`SpatialMechanism`, a description with its start by body, what every engine
   takes (``study.run``, ``study.validate``), the one public way to run a spatial mechanism;
 * :mod:`~study.spatial.bricard`: Bricard's mechanism (IFToMM A04), rows redundant at every configuration;
+  :mod:`~study.spatial.bricard_peer`: the same loop as Exudyn's test model ``bricardMechanism.py`` builds it;
 * :mod:`~study.spatial.heavy_top`, :mod:`~study.spatial.slider_crank`: the heavy top and Haug's spatial slider-crank;
 * :mod:`~study.spatial.catalogue`: the study's spatial mechanisms by name (``SPATIAL``, read by
   :func:`study.mechanisms.named_mechanism`).

@@ -36,25 +36,36 @@ def geometry() -> tuple[np.ndarray, np.ndarray]:
     return corners, np.array(values("axes", TABLE)).reshape(RODS + 1, 3)
 
 
-def bricard() -> SpatialDescription:
-    """The description of A04 (module docstring)."""
-    corners, axes = geometry()
-    m, w = tolerance("mass", TABLE), tolerance("cross_section", TABLE)
-    d = SpatialDescription("bricard", label="Bricard's mechanism (IFToMM A04)")
+def rod_loop(d: SpatialDescription, corners: np.ndarray, axes: np.ndarray, mass: float, width: float,
+             frames: list[np.ndarray] | None = None) -> None:
+    """Bricard's loop into ``d``: rods ``rod1`` .. ``rod5`` of ``mass`` and a square cross-section of side ``width``,
+    rod k from corner k-1 to corner k with its centre of mass at the middle, the revolute joints ``joint0`` ..
+    ``joint5`` at the corners (6, 3) about ``axes`` (6, 3, global at t = 0), the first and the last to ground, and the
+    redundant row. ``frames``: rod k's body frame at t = 0 (the matrix whose columns are its axes in global
+    components), None for frames parallel to the global one."""
     for k in range(RODS):
-        along = corners[k + 1] - corners[k]
+        along, tail, head = corners[k + 1] - corners[k], axes[k], axes[k + 1]
         length = float(np.linalg.norm(along))
+        if frames is not None:
+            along, tail, head = frames[k].T @ along, frames[k].T @ tail, frames[k].T @ head
         u = along / length
-        across = m * (length ** 2 + w ** 2) / 12
-        inertia = across * np.eye(3) + (m * 2 * w ** 2 / 12 - across) * np.outer(u, u)
-        d.body(f"rod{k + 1}", m, inertia, points={"tail": tuple(-along / 2), "head": tuple(along / 2)},
-               axes={"tail": tuple(axes[k]), "head": tuple(axes[k + 1])})
+        across = mass * (length ** 2 + width ** 2) / 12
+        inertia = across * np.eye(3) + (mass * 2 * width ** 2 / 12 - across) * np.outer(u, u)
+        d.body(f"rod{k + 1}", mass, inertia, points={"tail": tuple(-along / 2), "head": tuple(along / 2)},
+               axes={"tail": tuple(tail), "head": tuple(head)})
     d.revolute("joint0", ("rod1", "tail", "tail"), (GROUND, tuple(corners[0]), tuple(axes[0])))
     for k in range(1, RODS):
         d.revolute(f"joint{k}", (f"rod{k + 1}", "tail", "tail"), (f"rod{k}", "head", "head"))
     d.revolute(f"joint{RODS}", (f"rod{RODS}", "head", "head"), (GROUND, tuple(corners[RODS]), tuple(axes[RODS])))
-    d.gravity(values("gravity", TABLE))
     d.redundant_rows(1, REASON)
+
+
+def bricard() -> SpatialDescription:
+    """The description of A04 (module docstring)."""
+    corners, axes = geometry()
+    d = SpatialDescription("bricard", label="Bricard's mechanism (IFToMM A04)")
+    rod_loop(d, corners, axes, tolerance("mass", TABLE), tolerance("cross_section", TABLE))
+    d.gravity(values("gravity", TABLE))
     return d
 
 
