@@ -258,6 +258,103 @@ def test_a_wheel_braked_by_its_bearing_converges_at_order_two(thrust):
         assert np.all(observed_orders(steps, e) >= tol("min_order")), (name, e)
 
 
+def spinner() -> SpatialDescription:
+    """A carrier on a revolute joint to ground about a tilted axis, and a rotor on a revolute joint to the carrier,
+    off its centre, about an axis across the carrier's: both pins with friction (the rotor's between two moving
+    bodies), under gravity."""
+    d = SpatialDescription("friction_spinner")
+    d.body("carrier", 3.0, (0.2, 0.3, 0.35), points={"pivot": (0.0, 0.0, -0.3), "seat": (0.25, 0.1, 0.2)},
+           axes={"spin": (0.0, 0.0, 1.0), "cross": (1.0, 1.0, 0.5)})
+    d.body("rotor", 1.0, (0.02, 0.03, 0.04), points={"hub": (0.05, 0.0, 0.1)}, axes={"axle": (0.0, 0.0, 1.0)})
+    d.revolute("mount", ("carrier", "pivot", "spin"), (GROUND, (0.0, 0.0, 0.0), (0.0, 0.6, 0.8)))
+    d.revolute("spindle", ("rotor", "hub", "axle"), ("carrier", "seat", "cross"))
+    d.gravity((0.5, 0.0, -9.81))
+    d.friction("mount", 0.3, 0.2, resistance=0.1, radius=0.03)
+    d.friction("spindle", 0.4, 0.3, resistance=0.05, radius=0.02)
+    return d
+
+
+def spinner_start(d: SpatialDescription):
+    """The carrier at 3 rad/s about its pin, the rotor at 10 rad/s about its own relative to it: the consistent
+    state (the centres' velocities follow from the joints)."""
+    eom = spatial_equations(frictionless(d))
+    carrier = Rotation.align_vectors([[0.0, 0.6, 0.8]], [[0.0, 0.0, 1.0]])[0]
+    cross = carrier.apply(np.array([1.0, 1.0, 0.5]) / 1.5)
+    rotor = Rotation.align_vectors([cross], [[0.0, 0.0, 1.0]])[0]
+    spin = 3.0 * np.array([0.0, 0.6, 0.8])
+    seat = carrier.apply([0.0, 0.0, 0.3]) + carrier.apply([0.25, 0.1, 0.2])
+    q0, qd0 = initial_state(d, eom, {"carrier": carrier.apply([0.0, 0.0, 0.3]),
+                                     "rotor": seat - rotor.apply([0.05, 0.0, 0.1])},
+                            orientations={"carrier": wxyz(carrier), "rotor": wxyz(rotor)},
+                            angular_velocities={"carrier": spin, "rotor": spin + 10.0 * cross})
+    return eom, q0, qd0
+
+
+def e_matrices(q: np.ndarray) -> list[np.ndarray]:
+    """E(p) of every body at q (omega = 2 E p_dot; a global torque n has the generalized force 2 E^T n on p)."""
+    out = []
+    for k in range(3, len(q), 7):
+        e0, e1, e2, e3 = q[k:k + 4]
+        out.append(np.array([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]]))
+    return out
+
+
+def pin_saddle_point(d: SpatialDescription, eom, q0: np.ndarray, qd0: np.ndarray):
+    """The saddle point of the frictionless equations with every pin's friction torque pair as an applied load, the
+    law at the transverse reaction it produces (a fixed point: the torques change the reactions): tau = -(mu_k r
+    |R_t|_delta + T0) tanh(omega_rel/eps) about u = A_b h_b on body a, -tau u on body b, R_t the part of the
+    joint's force rows' multipliers across u."""
+    bodies, e = list(d.bodies), e_matrices(q0)
+    omega = {b: 2 * e[i] @ qd0[7 * i + 3:7 * i + 7] for i, b in enumerate(bodies)}
+    pins = []
+    for j in d.joints:
+        f = d.frictions[j.name]
+        axis = np.array(d.bodies[j.body_b].axes[j.axis_b]) if j.body_b != GROUND else np.array(j.axis_b)
+        if j.body_b != GROUND:
+            i = bodies.index(j.body_b)
+            axis = Rotation.from_quat(np.roll(q0[7 * i + 3:7 * i + 7], -1)).apply(axis)
+        rate = axis @ (omega[j.body_a] - omega.get(j.body_b, 0.0))
+        rows = [eom.constraint_names.index(f"{j.name}_{c}") for c in "xyz"]
+        pins.append((j, f, axis, rate, rows))
+    applied, previous = np.zeros(len(q0)), None
+    for _ in range(50):
+        qdd, lam = Multiplier().solve(eom.mass(q0), eom.forces(0.0, q0, qd0) + applied, eom.phi_q(q0),
+                                      eom.gamma(q0, qd0))
+        applied = np.zeros(len(q0))
+        for j, f, axis, rate, rows in pins:
+            across = lam[rows] - (lam[rows] @ axis) * axis
+            tau = -(f.mu_kinetic * f.radius * np.sqrt(across @ across + DELTA ** 2) + f.resistance) * \
+                np.tanh(rate / DEFAULT_EPS)
+            for body, sign in ((j.body_a, 1.0), (j.body_b, -1.0)):
+                if body != GROUND:
+                    i = bodies.index(body)
+                    applied[7 * i + 3:7 * i + 7] += 2 * e[i].T @ (sign * tau * axis)
+        if previous is not None and np.array_equal(lam, previous):
+            return qdd, lam
+        previous = lam
+    raise AssertionError(f"the pins' friction and reactions did not settle in 50 passes: {lam - previous}")
+
+
+def test_initial_multipliers_of_pins_with_friction_match_the_saddle_point():
+    """At t = 0, with both pins turning (the rotor's relative to the moving carrier), Exudyn's multipliers and
+    accelerations solve the saddle point with each pin's friction torque pair at its own transverse reaction
+    (:func:`pin_saddle_point`): the torque about the carrier's turned axis, on both bodies, with the sign of the
+    relative rate. Band: as tests/test_spatial_exudyn.py (reaction_zero_velocity_relative of the multipliers, and
+    reaction_velocity_term_relative of the part that the velocity terms gamma produce)."""
+    d = spinner()
+    eom, q0, qd0 = spinner_start(d)
+    qdd, lam = pin_saddle_point(d, eom, q0, qd0)
+    qdd_g, lam_g = Multiplier().solve(eom.mass(q0), np.zeros(len(q0)), eom.phi_q(q0), eom.gamma(q0, qd0))
+    qdd_0, lam_0 = Multiplier().solve(eom.mass(q0), eom.forces(0.0, q0, qd0), eom.phi_q(q0), eom.gamma(q0, qd0))
+    r = run_spatial(d, eom, q0, qd0, 0.002, 1e-3)
+    rel, vel = tol("reaction_zero_velocity_relative"), tol("reaction_velocity_term_relative")
+    band = rel * np.abs(lam).max() + vel * np.abs(lam_g).max()
+    assert np.abs(r.lam[0] - lam).max() <= band, (r.lam[0], lam)
+    assert np.abs(r.lam[0] - lam_0).max() > band          # the friction shows: the frictionless solve is outside
+    band = rel * np.abs(qdd).max() + vel * np.abs(qdd_g).max()
+    assert np.abs(r.qdd[0] - qdd).max() <= band < np.abs(r.qdd[0] - qdd_0).max()
+
+
 @pytest.mark.parametrize("friction, eps, frictions, culprit", [
     ("exact", DEFAULT_EPS, True, "friction = 'exact': the Exudyn model of friction_block's joint friction"),
     ("sign", DEFAULT_EPS, True, "has the regularized law only"),
