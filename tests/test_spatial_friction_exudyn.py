@@ -128,10 +128,11 @@ def test_a_block_sliding_under_constant_loads_follows_the_closed_form(v0):
         assert r.meta["friction"] == "regularized" and r.meta["eps"] == DEFAULT_EPS
 
 
-def test_a_block_under_a_varying_normal_force_converges_at_order_two():
+@pytest.mark.parametrize("solver", ["index3", "index2"])
+def test_a_block_under_a_varying_normal_force_converges_at_order_two(solver):
     """With the transverse force press sin(RATE t) m g_perp the normal force is m |g_perp| (1 + press sin(RATE t))
     and s(t) = s0 + v0 t + a0 t^2/2 + mu_k |g_perp| press (t/RATE - sin(RATE t)/RATE^2) (v0 < 0, a0 the constant
-    part). At the steps h, h/2, h/4 Exudyn's errors in s and in the energy balance (kinetic + potential - the
+    part). At the steps h, h/2, h/4 Exudyn's errors (both implicit solvers) in s and in the energy balance (kinetic + potential - the
     works of the force and of the friction) are above the floor and fall at order >= min_order; a friction read
     one step late would leave an O(h) error. The recorded friction is the law at the converged normal of its step."""
     t_end, h = tolerance("spatial_friction_block_horizon"), tolerance("spatial_friction_block_step")
@@ -141,7 +142,7 @@ def test_a_block_under_a_varying_normal_force_converges_at_order_two():
     a0 = G @ U + level(MASS * g_perp) / MASS
     steps, errors, energy = [h, h / 2, h / 4], [], []
     for step in steps:
-        r = run_spatial(d, eom, q0, qd0, t_end, step)
+        r = run_spatial(d, eom, q0, qd0, t_end, step, solver=solver)
         t = r.t
         s = S0 + v0 * t + 0.5 * a0 * t ** 2 + MU * g_perp * PRESS * (t / RATE - np.sin(RATE * t) / RATE ** 2)
         errors.append(np.abs(slide(r.q) - s).max())
