@@ -19,6 +19,9 @@ Exudyn's coordinates and the norm rows' multipliers (below).
 * distance: ConnectorDistance, marker 0 at body b's point, marker 1 at body a's (the row |p_m1 - p_m0| - L).
 * point force: LoadForceVector at a MarkerBodyPosition (global components); torque: LoadTorqueVector at a
   MarkerBodyRigid, ``bodyFixed`` for the 'body' frame. A law of time is a Python load user function.
+* friction in a revolute or prismatic joint (``d.frictions``): the regularized law's torque or force pair from
+  Python load user functions that read the joint's reaction (:mod:`study.exudyn_models.spatial_friction`, which
+  says what lag that reading has), with friction='regularized'; a sensor of the joint's reaction either way.
 
 Result mapping (:func:`result`): q, qd, qdd = the nodes' coordinates (reference + displacement), rates and
 accelerations (Exudyn's, not finite differences). lam, in ``eom.constraint_names`` order: a joint row's multiplier
@@ -29,7 +32,9 @@ formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`;
 multiplier stays 0): the result carries the in-house convention's value, the p-block's component along p of
 Q - M qdd - Phi_q,joints^T lam on Exudyn's state, divided by 2 p^T p. Energies: kinetic from Exudyn's centre
 velocities and body-frame angular velocities, potential -sum m g . r, and work_<load> the trapezoidal integral of
-each load's power (law value . the sensed point velocity or angular velocity).
+each load's power (law value . the sensed point velocity or angular velocity). A joint with friction adds
+``normal_<joint>``, ``friction_<joint>`` and ``work_friction_<joint>``, and its friction forces' part to the norm
+rows' multipliers (:mod:`study.exudyn_models.spatial_friction`).
 """
 
 from __future__ import annotations
@@ -41,12 +46,16 @@ import numpy as np
 import sympy as sp
 from exudyn.itemInterface import (LoadForceVector, LoadMassProportional, LoadTorqueVector, MarkerBodyMass,
                                   MarkerBodyPosition, MarkerBodyRigid, NodeRigidBodyEP, ObjectConnectorDistance,
-                                  ObjectJointGeneric, ObjectJointSpherical, ObjectRigidBody, SensorBody, SensorNode)
+                                  ObjectJointGeneric, ObjectJointSpherical, ObjectRigidBody, SensorBody, SensorNode,
+                                  SensorObject)
 
 import study.exudyn_models.settings as settings
 import study.exudyn_models.solve as solve
+import study.exudyn_models.spatial_friction as spatial_friction
 from study.exudyn_models.building import OVT, Model
+from study.exudyn_models.guards import seed_reaction_guards
 from study.model.eom import EquationsOfMotion
+from study.reference_data import tolerance
 from study.results import SimulationResult, package_versions
 from study.spatial.description import SpatialDescription, spatial_only
 from study.spatial.elements import (GROUND, Cylindrical, Distance, FixedJoint, PointLoad, Prismatic, Revolute,
@@ -82,6 +91,8 @@ class SpatialBuilt:
     objects: dict = field(default_factory=dict)   # body -> object
     joints: dict = field(default_factory=dict)    # joint name -> object
     laws: dict = field(default_factory=dict)      # load name -> callable t -> (3,) values
+    frictions: dict = field(default_factory=dict)  # joint name -> its SpatialJointFriction (friction 'regularized')
+    options: dict = field(default_factory=dict)    # the friction option and eps of a description with friction
     ae: list = field(default_factory=list)        # (t, algebraic coordinates) at t = 0 and after every step
 
     def marker(self, body: str, point, rotation: Array | None = None) -> int:
@@ -194,16 +205,26 @@ def add_load(b: SpatialBuilt, load) -> None:
         OVT.AngularVelocity)))
 
 
-def build(d: SpatialDescription, q0, qd0) -> SpatialBuilt:
+def build(d: SpatialDescription, q0, qd0, friction: str = "regularized", eps: float = settings.DEFAULT_EPS) -> \
+        SpatialBuilt:
     """The Exudyn model of a spatial description at the state (q0, qd0) (the description's coordinates), with the
-    algebraic coordinates recorded at t = 0 (first pre-step call) and after every step."""
+    algebraic coordinates recorded at t = 0 (first pre-step call) and after every step. A joint with friction gets a
+    sensor of its reaction (ForceLocal) and, with ``friction`` 'regularized', its friction loads of width ``eps``
+    (:mod:`study.exudyn_models.spatial_friction`); 'none' leaves them out."""
     d = spatial_only(d)
-    b = SpatialBuilt(d, Model())
+    b = SpatialBuilt(d, Model(), options={"friction": friction, "eps": eps} if d.frictions else {})
     add_bodies(b, np.asarray(q0, dtype=float), np.asarray(qd0, dtype=float))
     for j in d.joints:
         add_joint(b, j)
     for load in d.loads:
         add_load(b, load)
+    for j in d.joints:
+        if j.name in d.frictions:
+            b.sensor((j.name, "reaction"), SensorObject(**_store(objectNumber=b.joints[j.name],
+                                                                 outputVariableType=OVT.ForceLocal)))
+            if friction == "regularized" and spatial_friction.active(d.frictions[j.name]):
+                b.frictions[j.name] = spatial_friction.add_joint_friction(
+                    b, j, d.frictions[j.name], eps, tolerance("pin_friction_norm_width"))
 
     def record_start(mbs, t):
         if not b.ae:
@@ -238,8 +259,9 @@ def joint_multipliers(b: SpatialBuilt, ae: Array, names) -> tuple[Array, list[in
 
 
 def norm_multipliers(eom: EquationsOfMotion, t: Array, q: Array, qd: Array, qdd: Array, lam: Array,
-                     norms: list[int]) -> None:
-    """Fill the norm rows of ``lam`` with the in-house convention's value (module docstring), in place."""
+                     norms: list[int], radial: dict[int, Array]) -> None:
+    """Fill the norm rows of ``lam`` with the in-house convention's value (module docstring), in place; ``radial``
+    (norm row -> values) adds p . Q_p of loads that ``eom.forces`` does not hold (the joints' friction)."""
     joints = [k for k in range(lam.shape[1]) if k not in norms]
     for n in range(len(t)):
         jac = eom.phi_q(q[n])
@@ -247,7 +269,8 @@ def norm_multipliers(eom: EquationsOfMotion, t: Array, q: Array, qd: Array, qdd:
         for k in norms:
             block = np.flatnonzero(jac[k])       # the body's four Euler parameters (2 p^T)
             p = 0.5 * jac[k, block]
-            lam[n, k] = p @ rest[block] / (2 * p @ p)
+            along = p @ rest[block] + radial[k][n] if k in radial else p @ rest[block]
+            lam[n, k] = along / (2 * p @ p)
 
 
 def _energies(b: SpatialBuilt, t: Array, series: dict) -> dict[str, Array]:
@@ -279,8 +302,11 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
     lam, norms = joint_multipliers(b, ae, eom.constraint_names)
     idx = grid.output_indices
     t, q, qd, qdd, lam = t[idx], q[idx], qd[idx], qdd[idx], lam[idx]
-    norm_multipliers(eom, t, q, qd, qdd, lam, norms)
-    energies = {k: v[idx] for k, v in _energies(b, grid.h * np.arange(grid.n_steps + 1), series).items()}
+    forces, powers, radial = spatial_friction.friction_results(b, eom, q, series, grid, stats)
+    norm_multipliers(eom, t, q, qd, qdd, lam, norms, radial)
+    steps = grid.h * np.arange(grid.n_steps + 1)
+    energies = _energies(b, steps, series)
+    energies.update({f"work_{k}": solve.cumulative_trapezoid(v, steps) for k, v in powers.items()})
     meta = {
         "engine": "exudyn", "exudyn_version": settings.exudyn_version(), "method": f"exudyn_{solver}",
         "solver": solver, "solver_description": settings.SOLVER_DESCRIPTIONS[solver], "h": grid.h,
@@ -292,45 +318,64 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
         "norm_multipliers": NORM_NOTE, "work_integration": solve.WORK_NOTE, **eom.redundancy_note(),
         "versions": package_versions(),
     }
+    if b.options:
+        meta.update(b.options, friction_law=spatial_friction.FRICTION_LAW,
+                    friction_evaluation=spatial_friction.REACTION_READING)
     return SimulationResult(t=t, q=q, qd=qd, qdd=qdd, lam=lam, phi=np.array([eom.phi(x) for x in q]),
-                            phidot=np.array([eom.phi_q(x) @ v for x, v in zip(q, qd)]), energies=energies,
-                            stats=stats, meta=meta)
+                            phidot=np.array([eom.phi_q(x) @ v for x, v in zip(q, qd)]),
+                            energies={k: v[idx] for k, v in energies.items()},
+                            forces={k: v[idx] for k, v in forces.items()}, stats=stats, meta=meta)
+
+
+def check_run(d: SpatialDescription, t_end: float, h: float, solver: str, output_step: float | None, friction: str,
+              eps: float, configuration: str, linear_solver: str, ignore_singular: bool,
+              newton_tolerance: float) -> settings.RunGrid:
+    """The time grid of a run of ``d`` with these options, each checked (the friction options by
+    :func:`study.exudyn_models.spatial_friction.check_options`, the others by
+    :func:`study.exudyn_models.settings.check_arguments`)."""
+    spatial_friction.check_options(spatial_only(d), friction, eps)
+    return settings.check_arguments(t_end, h, solver, output_step, friction, eps, configuration, linear_solver,
+                                    ignore_singular, newton_tolerance)
 
 
 def run_spatial(d: SpatialDescription, eom: EquationsOfMotion, q0, qd0, t_end: float, h: float,
                 solver: str = "index3", output_step: float | None = None, configuration: str = "python",
                 ignore_singular: bool = False, linear_solver: str = "dense",
-                newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
+                newton_tolerance: float = settings.NEWTON_TOLERANCE, friction: str = "regularized",
+                eps: float = settings.DEFAULT_EPS) -> SimulationResult:
     """Simulate a spatial description in Exudyn from the consistent state (q0, qd0) (:func:`study.spatial.
-    initial_state`); ``eom`` (:func:`study.spatial.spatial_equations` of the same description) maps the result.
+    initial_state`); ``eom`` (:func:`study.spatial.spatial_equations` of the same description, or of any description
+    with the same bodies, joints and loads: its coordinates, rows, Phi and applied forces) maps the result.
 
     ``solver``: 'index3' (generalized-alpha, index-3 constraints) or 'index2' (trapezoidal, index-2); Exudyn's
     explicit solvers refuse the joints and the Euler-parameter rows (``exudyn.ModelError``). ``t_end`` a whole
     number of fixed steps ``h``; ``output_step`` a whole multiple of h (default: every step); ``configuration``,
     ``ignore_singular``, ``linear_solver``, ``newton_tolerance`` as for :func:`study.exudyn_models.run`.
+    ``friction`` 'regularized' (the joints' friction, :mod:`study.exudyn_models.spatial_friction`, of width ``eps``
+    [m/s, rad/s]) or 'none' (left out); a description without friction takes neither another mode nor another eps
+    (:func:`study.exudyn_models.spatial_friction.check_options`).
     """
-    grid = settings.check_arguments(t_end, h, solver, output_step, "none", settings.DEFAULT_EPS, configuration,
-                                    linear_solver, ignore_singular, newton_tolerance)
+    grid = check_run(d, t_end, h, solver, output_step, friction, eps, configuration, linear_solver, ignore_singular,
+                     newton_tolerance)
     q0 = np.asarray(q0, dtype=float)
-    b = build(d, q0, qd0)
-    # loads of time only: no load Jacobian. Redundant rows (eom.redundant_rows): Newton's singular matrix factorized
-    # with the dependent equations left out (linearSolver.ignoreSingularJacobian) by Eigen's dense full-pivoting LU,
-    # as in Exudyn's TestModels/bricardMechanism.py; Exudyn's own dense inverse (EXUdense) stops at the first step of
-    # Bricard's mechanism with the flag set ('reduction of step size reached minimum step size')
+    b = build(d, q0, qd0, friction, eps)
+    # loads of time only: no load Jacobian (the joints' friction: spatial_friction.loads_jacobian). Redundant rows
+    # (eom.redundant_rows): Newton's singular matrix factorized with the dependent equations left out
+    # (linearSolver.ignoreSingularJacobian) by Eigen's dense full-pivoting LU, as in Exudyn's
+    # TestModels/bricardMechanism.py; Exudyn's own dense inverse (EXUdense) stops at the first step of Bricard's
+    # mechanism with the flag set ('reduction of step size reached minimum step size')
     redundant = eom.redundant_rows > 0
     ignore = ignore_singular or redundant
-    simulation = settings.simulation_settings(grid, solver, 0, configuration, ignore, linear_solver, newton_tolerance)
+    simulation = settings.simulation_settings(grid, solver, spatial_friction.loads_jacobian(d), configuration, ignore,
+                                              linear_solver, newton_tolerance)
     if redundant:
         simulation.linearSolver.solverType = exu.LinearSolverType.EigenDense
     stats = {"configuration": configuration, "linear_solver": "eigen_dense" if redundant else linear_solver,
              "newton_tolerance": newton_tolerance, "ignore_singular_jacobian": ignore}
+    if solver in settings.IMPLICIT_SOLVERS:
+        stats.update(seed_reaction_guards(b.model, simulation, list(b.frictions.values())))
     stats.update(solve.solve(b.model, simulation, solver))
     return result(b, eom, q0, grid, solver, stats)
-
-
-#: the Exudyn run's friction options a spatial description takes: it has no friction entries yet, so the
-#: regularized law (the Exudyn specification's default) and none are the same frictionless model
-FRICTIONLESS = ("regularized", "none")
 
 
 def run(mechanism, t_end: float, h: float, solver: str = "index3", output_step: float | None = None,
@@ -339,14 +384,9 @@ def run(mechanism, t_end: float, h: float, solver: str = "index3", output_step: 
         newton_tolerance: float = settings.NEWTON_TOLERANCE) -> SimulationResult:
     """:func:`run_spatial` of a :class:`study.spatial.SpatialMechanism` from its consistent initial state, with the
     options of :func:`study.exudyn_models.run` (``study.run(mechanism, Exudyn(...), t_end)`` calls it for a spatial
-    mechanism); ``friction`` 'regularized' or 'none' (FRICTIONLESS) and ``eps`` its default: a spatial description
-    has no friction entries yet, so another width is refused rather than ignored."""
-    if friction not in FRICTIONLESS:
-        raise ValueError(f"friction = {friction!r}: {mechanism.name} is spatial and has no friction entries; "
-                         f"valid choices: {', '.join(FRICTIONLESS)}")
-    if eps != settings.DEFAULT_EPS:
-        raise ValueError(f"eps = {eps!r}: {mechanism.name} is spatial and has no friction entries for a width to "
-                         f"apply to; leave eps at its default {settings.DEFAULT_EPS}")
+    mechanism); ``friction`` and ``eps`` as for :func:`run_spatial`; every option is checked before any work."""
+    check_run(mechanism.description, t_end, h, solver, output_step, friction, eps, configuration, linear_solver,
+              ignore_singular, newton_tolerance)
     state = mechanism.initial_state()
     return run_spatial(mechanism.description, mechanism.equations(), state.q, state.qd, t_end, h, solver,
-                       output_step, configuration, ignore_singular, linear_solver, newton_tolerance)
+                       output_step, configuration, ignore_singular, linear_solver, newton_tolerance, friction, eps)
