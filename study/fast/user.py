@@ -2,7 +2,9 @@
 
 A described mechanism's kernels are generated from its description (:mod:`study.model.codegen`). Equations bound from
 generated code (:class:`~study.model.compile.GeneratedEquations`, e.g. a spatial description's) get the compiled
-module of the same symbolic system (:func:`study.fast.codegen.system_module`); the compiled path has no solver for
+module of the same symbolic system (:func:`study.fast.codegen.system_module`), whose ``evaluate`` fills the rate
+Jacobians and biases of the system's friction entries (a spatial joint's friction, :mod:`study.spatial.friction`), so
+the compiled loop runs them as it runs a planar description's pins; the compiled path has no solver for
 rank-deficient rows, so equations with redundant rows (Bricard's) are refused by name. A user's other equations have
 no description: their callables (mass, forces, phi, phi_q, gamma) are compiled by numba
 as they are and wrapped into kernels of the generated ones' signatures
@@ -101,7 +103,13 @@ def user_kernels(eom: EquationsOfMotion) -> ModuleType | SimpleNamespace:
 
 
 def generated_kernels(eom: GeneratedEquations) -> ModuleType:
-    """The compiled module of the symbolic system ``eom`` was generated from (no symbolic parameters)."""
+    """The compiled module of the symbolic system ``eom`` was generated from (no symbolic parameters); its friction
+    entries (sliding contacts, then pins) must be the system's rates, one each, or the kernels would not fill them."""
+    entries = len(eom.contacts) + len(eom.pin_frictions)
+    if entries != len(eom.system.rates):
+        raise ValueError(f"backend='compiled' cannot run the EquationsOfMotion {eom.name!r}: it has {entries} friction "
+                         f"entries (sliding contacts and pins) but its symbolic system {eom.system.name!r} generates "
+                         f"{len(eom.system.rates)} rate rows for them; use backend='reference'")
     if eom.redundant_rows:
         raise ValueError(f"backend='compiled' cannot run the EquationsOfMotion {eom.name!r}: {eom.redundant_rows} of "
                          f"its {eom.n_constraints} constraint rows are redundant (rank-deficient Phi_q at every "

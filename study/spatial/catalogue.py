@@ -9,6 +9,7 @@ from typing import Callable, Mapping
 
 from study.spatial.bricard import bricard_mechanism
 from study.spatial.bricard_peer import exudyn_bricard_mechanism
+from study.spatial.friction_carriage import friction_carriage
 from study.spatial.heavy_top import heavy_top_mechanism
 from study.spatial.mechanism import SpatialMechanism
 from study.spatial.slider_crank import spatial_slider_crank
@@ -16,4 +17,4 @@ from study.spatial.slider_crank import spatial_slider_crank
 #: name -> its mechanism's maker (the name is the description's)
 SPATIAL: Mapping[str, Callable[[], SpatialMechanism]] = MappingProxyType({
     "bricard": bricard_mechanism, "exudyn_bricard": exudyn_bricard_mechanism, "heavy_top": heavy_top_mechanism,
-    "spatial_slider_crank": spatial_slider_crank})
+    "spatial_slider_crank": spatial_slider_crank, "friction_carriage": friction_carriage})

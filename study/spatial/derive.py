@@ -20,6 +20,7 @@ velocity terms (moved to the left as in :mod:`study.model.derive`) are C qd = -8
 Loads: gravity g is the potential V = -sum m g . r; a force f at body point s' has the generalized force
 (d(r + A s')/dq)^T f; a torque n in the global frame 2 E^T n, in the body frame 2 G^T n' (on the p block).
 Constraints: the joints' rows (:mod:`study.spatial.joints`) and one norm row per body; gamma = -(Phi_q qd)_q qd.
+A joint with friction has its relative rate P qd and Pdot qd (:mod:`study.spatial.friction`).
 :func:`spatial_system` hands them to the code generator (:mod:`study.model.codegen`) of both backends.
 """
 
@@ -32,6 +33,7 @@ import sympy as sp
 from study.model.codegen import SymbolicSystem
 from study.spatial.description import SpatialDescription, spatial_only
 from study.spatial.elements import PointLoad, SpatialDescriptionError
+from study.spatial.friction import friction_rates
 from study.spatial.joints import BodyFrames, joint_rows
 from study.spatial.rotations import e_matrix, g_matrix
 
@@ -55,6 +57,7 @@ class SpatialSymbolic:
     constraint_names: tuple[str, ...]
     loads: dict[str, sp.Matrix]   # (m, 1) generalized force of every applied load
     points: dict[str, sp.Matrix]  # (3, 1) global position of every named body point, '<body>.<point>'
+    rates: dict[str, tuple[sp.Matrix, sp.Expr]]   # (1, m) P and Pdot qd of every joint with friction
 
 
 def _coordinates(d: SpatialDescription) -> tuple[sp.Matrix, sp.Matrix, tuple[str, ...]]:
@@ -80,9 +83,6 @@ def derive_spatial(d: SpatialDescription) -> SpatialSymbolic:
     d = spatial_only(d)
     if not d.bodies:
         raise SpatialDescriptionError(f"mechanism {d.name!r} has no bodies")
-    if d.frictions:
-        raise SpatialDescriptionError(f"mechanism {d.name!r}: friction in joints {sorted(d.frictions)}: the in-house "
-                                      f"equations of spatial joint friction are not built yet")
     q, qd, names = _coordinates(d)
     frames = BodyFrames(d, q)
     m = len(q)
@@ -106,7 +106,8 @@ def derive_spatial(d: SpatialDescription) -> SpatialSymbolic:
     points = {f"{b}.{k}": frames.point(b, k) for b, body in d.bodies.items() for k in body.points}
     return SpatialSymbolic(q=q, qd=qd, t=d.t, coordinate_names=names, mass=mass, velocity_terms=vel,
                            potential=potential, phi=phi, phi_q=phi_q, gamma=gamma,
-                           constraint_names=tuple(constraint_names), loads=_loads(d, q, frames), points=points)
+                           constraint_names=tuple(constraint_names), loads=_loads(d, q, frames), points=points,
+                           rates=friction_rates(d, frames, q, qd))
 
 
 def _loads(d: SpatialDescription, q: sp.Matrix, frames: BodyFrames) -> dict[str, sp.Matrix]:
@@ -126,11 +127,17 @@ def _loads(d: SpatialDescription, q: sp.Matrix, frames: BodyFrames) -> dict[str,
 
 def spatial_system(name: str, s: SpatialSymbolic) -> SymbolicSystem:
     """The code generator's view of the equations ``s`` of mechanism ``name``: no parameters (the description's
-    numbers are in the expressions), switches, contacts or pins; its kinematic functions are the points' positions
-    ``pos__<body>.<point>`` (q) -> (3,)."""
+    numbers are in the expressions), switches or sliding contacts; the joints with friction are pins (their rates
+    P, Pdot qd; :mod:`study.spatial.friction`). Its kinematic functions are the points' positions
+    ``pos__<body>.<point>`` (q) -> (3,) and each joint with friction's ``friction_jac__<J>`` (q) -> (m,) and
+    ``friction_bias__<J>`` (q, qd) -> ()."""
+    m = len(s.q)
+    kinematics = [(f"pos__{point}", "q", x, (3,)) for point, x in s.points.items()]
+    for joint, (jac, bias) in s.rates.items():
+        kinematics += [(f"friction_jac__{joint}", "q", jac, (m,)),
+                       (f"friction_bias__{joint}", "q, qd", sp.Matrix([bias]), ())]
     return SymbolicSystem(
         name=name, q=tuple(s.q), qd=tuple(s.qd), parameters=(), modes=(), mass=s.mass,
         velocity_terms=s.velocity_terms, potential=s.potential,
         potential_gradient=sp.Matrix([s.potential]).jacobian(s.q).T, phi=s.phi, phi_q=s.phi_q, gamma=s.gamma,
-        loads=s.loads, indicators=sp.zeros(0, 1), rates=(),
-        kinematics=tuple((f"pos__{point}", "q", x, (3,)) for point, x in s.points.items()))
+        loads=s.loads, indicators=sp.zeros(0, 1), rates=tuple(s.rates.values()), kinematics=tuple(kinematics))

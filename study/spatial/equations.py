@@ -4,7 +4,8 @@ The matrices of :func:`study.spatial.derive.derive_spatial` go through the one c
 (:mod:`study.model.codegen`, by :func:`study.spatial.derive.spatial_system`): the reference module (cached on disk
 under the system's key, :func:`study.model.compile.system_key`) is bound here, so the reference path
 (``study.simulate``) runs a spatial mechanism as it runs any equations: the same stabilizations, integrators and
-acceleration solvers act on the joint rows and on the Euler-parameter norm rows alike. The result is a
+acceleration solvers act on the joint rows and on the Euler-parameter norm rows alike, and the joints with friction
+are the planar pins' :class:`~study.model.eom.FrictionalPin` (:mod:`study.spatial.friction`). The result is a
 :class:`~study.model.compile.GeneratedEquations`, which keeps the system: ``backend='compiled'`` generates its kernels
 from the same equations (:mod:`study.fast.user`).
 """
@@ -15,6 +16,7 @@ from study.model.codegen import reference_source
 from study.model.compile import GeneratedEquations, bound_forces, reference_module, system_key
 from study.spatial.derive import derive_spatial, spatial_system
 from study.spatial.description import SpatialDescription
+from study.spatial.friction import joint_pins
 
 
 def spatial_equations(d: SpatialDescription) -> GeneratedEquations:
@@ -29,4 +31,4 @@ def spatial_equations(d: SpatialDescription) -> GeneratedEquations:
         phi_q=f["phi_q"], gamma=f["gamma"], name=d.name, coordinate_names=s.coordinate_names,
         constraint_names=s.constraint_names, potential_energy=f["potential"], applied_forces=applied_forces,
         points={name: f[f"pos__{name}"] for name in s.points}, kinematics=f, redundant_rows=d.redundant,
-        system=system, key=key)
+        pin_frictions=joint_pins(d, s.constraint_names, f), system=system, key=key)

@@ -9,6 +9,9 @@ take (:mod:`study.exudyn_models.spatial`):
 * spherical: d = 0                                                  (3 rows, ``<name>_x``, ``_y``, ``_z``)
 * revolute: d = 0 and (A_a f_a)^T (A_b h_b) = (A_a g_a)^T (A_b h_b) = 0: body a's axis h_a stays parallel to
   h_b (Nikravesh 1988, sec. 11.3)                                   (``_x``, ``_y``, ``_z``, ``_f``, ``_g``)
+* revolute with friction (``d.frictions``): d = 0 written in body b's joint frame, (A_b f_b)^T d = (A_b g_b)^T d =
+  (A_b h_b)^T d = 0 (the same point set), so the first two multipliers are the transverse reaction R_t that scales
+  the friction torque (:mod:`study.spatial.friction`)     (``_tx``, ``_ty``, ``_tz``, ``_f``, ``_g``)
 * cylindrical: (A_b f_b)^T d = (A_b g_b)^T d = 0 (point a on body b's axis line) and the revolute's two parallel
   rows                                                              (``_tx``, ``_ty``, ``_f``, ``_g``)
 * universal: d = 0 and (A_a h_a)^T (A_b h_b) = 0                      (``_x``, ``_y``, ``_z``, ``_h``)
@@ -91,18 +94,31 @@ def _dot(u: sp.Matrix, v: sp.Matrix) -> sp.Expr:
     return (u.T * v)[0]
 
 
+def gap(frames: BodyFrames, j) -> sp.Matrix:
+    """d = r_a + A_a s_a' - r_b - A_b s_b', the gap between the joint's two points (global components)."""
+    return frames.point(j.body_a, j.a) - frames.point(j.body_b, j.b)
+
+
+def frame_vectors(d: SpatialDescription, frames: BodyFrames, j) -> tuple[list[sp.Matrix], list[sp.Matrix]]:
+    """The columns of the joint's frames R_a, R_b (:func:`joint_frames`) in the global frame: (A_a R_a e_k, A_b R_b
+    e_k) for k = 0, 1, 2 (a joint with axes)."""
+    r_a, r_b = joint_frames(d, j)
+    return ([frames.vector(j.body_a, r_a[:, k]) for k in range(3)],
+            [frames.vector(j.body_b, r_b[:, k]) for k in range(3)])
+
+
 def _rows(d: SpatialDescription, frames: BodyFrames, j) -> list[tuple[str, sp.Expr]]:
     """(suffix, row) of one joint (module docstring)."""
-    gap = frames.point(j.body_a, j.a) - frames.point(j.body_b, j.b)
+    gap_ = gap(frames, j)
     if isinstance(j, Distance):
-        return [("length", sp.sqrt(_dot(gap, gap)) - j.length)]
-    spherical = [(c, gap[k]) for k, c in enumerate("xyz")]
+        return [("length", sp.sqrt(_dot(gap_, gap_)) - j.length)]
+    spherical = [(c, gap_[k]) for k, c in enumerate("xyz")]
     if isinstance(j, Spherical):
         return spherical
-    r_a, r_b = joint_frames(d, j)
-    a = [frames.vector(j.body_a, r_a[:, k]) for k in range(3)]
-    b = [frames.vector(j.body_b, r_b[:, k]) for k in range(3)]
-    across = [("tx", _dot(b[0], gap)), ("ty", _dot(b[1], gap))]
+    a, b = frame_vectors(d, frames, j)
+    across = [("tx", _dot(b[0], gap_)), ("ty", _dot(b[1], gap_))]
+    if isinstance(j, Revolute) and j.name in d.frictions:
+        spherical = across + [("tz", _dot(b[2], gap_))]
     parallel = [("f", _dot(a[0], b[2])), ("g", _dot(a[1], b[2]))]
     lock = [(f"r{c}", _dot(a[k], b[n])) for c, (k, n) in zip("xyz", ((0, 1), (1, 2), (2, 0)))]
     perpendicular = [("h", _dot(a[2], b[1]))]
