@@ -326,15 +326,16 @@ def loop_kernels(s: Setup) -> tuple:
 
 
 def compile_kernels(s: Setup) -> None:
-    """Compile (or load) the kernels with declared signatures that the run passes to the loop, before its CPU time
-    is taken: they compile on first use (``study.kernels.cache.kernel``), which would otherwise be in the run's
-    first segment."""
+    """Compile (or load) the kernels with declared signatures that the run passes to the loop, under the compile
+    lock and before its CPU time is taken: they compile on first use (``study.kernels.cache.kernel``), which would
+    otherwise be in the run's first segment."""
     phases, kinematics = loop_kernels(s)
     module = s.model.module
-    for kernel, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS), (s.bias, BIAS),
-                              (phases, PHASES), (kinematics, KINEMATICS)):
-        if kernel is not None:
-            kernel.get_compile_result(signature)
+    with compile_lock():
+        for kernel, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS), (s.bias, BIAS),
+                                  (phases, PHASES), (kinematics, KINEMATICS)):
+            if kernel is not None:
+                kernel.get_compile_result(signature)
 
 
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,

@@ -23,7 +23,7 @@ from __future__ import annotations
 import os
 import threading
 import warnings
-from contextlib import contextmanager, nullcontext
+from contextlib import contextmanager
 from pathlib import Path
 
 from numba import njit
@@ -144,12 +144,12 @@ def _declare(dispatcher, signature) -> None:
     """Make ``dispatcher`` compile (or load) for ``signature`` alone, on first use: every way numba asks a dispatcher
     for code (a call from Python, a call from compiled code being typed, its use as a first-class function) compiles
     the declared signature first and then disables compilation, so each use finds that one overload (or converts
-    its arguments to it, or is refused) exactly as after ``njit(SIGNATURE)``. The compile holds the compile lock
-    where it can (:func:`_declared_lock`)."""
+    its arguments to it, or is refused) exactly as after ``njit(SIGNATURE)``. The compile lock is the caller's to
+    take (:func:`compile_lock`)."""
 
     def ensure():
         if dispatcher._can_compile:
-            with _declared_lock(), global_compiler_lock:
+            with global_compiler_lock:
                 if dispatcher._can_compile:
                     dispatcher.compile(signature)
                     dispatcher.disable_compile()
@@ -172,16 +172,6 @@ def _declare(dispatcher, signature) -> None:
     dispatcher._compile_for_args = compile_for_args
 
 
-def _declared_lock():
-    """The compile lock for a kernel with a declared signature compiling on first use; none while numba is compiling
-    on this thread (the caller's compile holds or skipped it; taking it inside numba's lock could deadlock with a
-    thread that holds it and waits for numba's) or where the cache folder is unusable (the reference path's kernels
-    then compile in memory, unlocked)."""
-    if global_compiler_lock.is_locked() or not _usable():
-        return nullcontext()
-    return compile_lock()
-
-
 def internal():
     """The decorator of a function that only compiled code calls: compiled for linking into its callers only, with
     no wrappers, no disk cache and no machine code of its own (:func:`study.kernels.linking.link_only`)."""
@@ -190,10 +180,12 @@ def internal():
 
 @contextmanager
 def compile_lock():
-    """Hold an exclusive lock on numba's cache folder while kernels compile or load: the frontend's entry kernels
-    and every kernel with a declared signature (each on first use, :func:`_declare`). Two processes that start
+    """Hold an exclusive lock on numba's cache folder while the compiled path's kernels compile or load: the
+    frontend's entry kernels and the kernels with declared signatures that a compiled run passes to its loop (its
+    generated ``evaluate``..., ``study.fast.frontend.compile_kernels``), each on first use. Two processes that start
     together (the test workers, the pipeline's) would otherwise both compile the same kernels; the second waits and
-    loads what the first saved.
+    loads what the first saved. The small kernels that the reference path calls from Python (the sgn functions, the
+    stabilization biases, the friction phases) compile on first use outside it.
     Where ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result. The
     folder is checked first (:func:`numba_dir`)."""
     try:
