@@ -17,7 +17,7 @@ from types import ModuleType
 from typing import Callable
 
 from study.integrity import ensure_generated
-from study.kernels.cache import SOURCE_HASH, compile_lock, generated_dir
+from study.kernels.cache import SOURCE_HASH, generated_dir
 from study.model.builder import MechanismBuilder
 from study.model.codegen import SymbolicSystem, compiled_source, planar_system
 from study.model.compile import description_key
@@ -51,6 +51,5 @@ def compiled_module(mechanism: str, key: str, system: Callable[[], SymbolicSyste
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # numba's cache pickles the module name and imports it on reload
-    with compile_lock():   # its kernels have declared signatures: they compile (or load) now
-        spec.loader.exec_module(module)
+    spec.loader.exec_module(module)   # its kernels have declared signatures: each compiles (or loads) on first use
     return module

@@ -32,7 +32,7 @@ from study.fast.dynamics import (ACCELERATIONS_ENTRY, CI_PROJECTS, PIN_NOT_CONVE
                                  no_phases, rhs_entry)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
                              FAIL_STEP, integrate_segment, segment_signature)
-from study.kernels.signatures import BIAS, EVALUATE, PHASES
+from study.kernels.signatures import BIAS, EVALUATE, INDICATORS, KINEMATICS, PHASES
 from study.laws.modes import as_mode, initial_mode, switch
 from study.fast.steppers import tableau
 from study.fast.support import METHOD_IDS, check_supported
@@ -318,6 +318,26 @@ def _raise_failure(outcome: int, integrator: str, t_reached: float, i_event: int
                            f"rerun with backend='reference' for a diagnosis")
 
 
+def loop_kernels(s: Setup) -> tuple:
+    """(phases, kinematics) as the loop receives them: None where a run does not call them (no friction, no
+    post-step projection), so the loop is compiled without them (``study.fast.loop.segment_signature``)."""
+    friction, projects = s.phases is not no_phases, bool(s.ci[CI_PROJECTS])
+    return (s.phases if friction else None), (s.model.module.kinematics if projects else None)
+
+
+def compile_kernels(s: Setup) -> None:
+    """Compile (or load) the kernels with declared signatures that the run passes to the loop, under the compile
+    lock and before its CPU time is taken: they compile on first use (``study.kernels.cache.kernel``), which would
+    otherwise be in the run's first segment."""
+    phases, kinematics = loop_kernels(s)
+    module = s.model.module
+    with compile_lock():
+        for kernel, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS), (s.bias, BIAS),
+                                  (phases, PHASES), (kinematics, KINEMATICS)):
+            if kernel is not None:
+                kernel.get_compile_result(signature)
+
+
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,
         max_evaluations: float | None = None, min_step: float | None = None):
     """Integrate with the compiled loop; returns (t, y, modes, stats) of the samples.
@@ -347,9 +367,8 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
     y, t, y_end = s.y0.copy(), 0.0, np.zeros(len(s.y0))
     events, restarts = [], 0
     first = float(step) if step is not None else 0.0
-    friction, projects = s.phases is not no_phases, bool(s.ci[CI_PROJECTS])   # the loop's parts a run needs
-    segment = entry(integrate_segment, segment_signature(friction, projects))
-    phases, kinematics = (s.phases if friction else None), (model.module.kinematics if projects else None)
+    phases, kinematics = loop_kernels(s)
+    segment = entry(integrate_segment, segment_signature(phases is not None, kinematics is not None))
     while True:
         outcome, t_reached, i_event = segment(
             model.module.evaluate, s.bias, phases, model.module.indicators, kinematics,
@@ -379,6 +398,7 @@ def simulate_compiled(eom: EquationsOfMotion, mechanism, q0, qd0, t_end: float, 
     check_supported(integrator, acceleration_solver, progress)
     s = setup(eom, mechanism, q0, qd0, method, friction, friction_eps, friction_sgn, acceleration_solver, **method_options)
     t_out = output_times(float(t_end), output_step)
+    compile_kernels(s)
     cpu0 = time.process_time()
     t, y, modes, stats = run(s, float(t_end), t_out, integrator, rtol, atol, step, max_evaluations, min_step)
     cpu = time.process_time() - cpu0

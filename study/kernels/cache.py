@@ -11,7 +11,9 @@ its own (its code is in the entry of each kernel that calls it, :mod:`study.kern
   (a ``__pycache__`` beside the source, inside the package) is never used.
 - **checked**: a cache folder that cannot be used is refused by :func:`check` (``CacheFolderError`` naming
   ``STUDY_CACHE_DIR`` or ``NUMBA_CACHE_DIR`` and the path) before a compiled run; while it is unusable nothing is
-  loaded from or saved to it (the kernels that ``import study`` compiles stay in memory).
+  loaded from or saved to it (the small kernels the reference path calls compile in memory).
+- **lazy**: a kernel with a declared signature compiles (or loads) for it on first use, not at import: ``import
+  study`` compiles nothing, and a run pays only for the kernels it calls (:func:`kernel`).
 - **healing**: an entry that fails to load (an index or data file cut, overwritten or emptied) is deleted with one
   :class:`CacheDiscardedWarning` naming its files, and the function is compiled again and saved afresh.
 """
@@ -25,6 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from numba import njit
+from numba.core.compiler_lock import global_compiler_lock
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, UserProvidedCacheLocator
 
 from study.cache_folder import CacheFolderError, cache_dir, configured_cache_dir, usable_folder
@@ -122,19 +125,51 @@ class HealingCache(FunctionCache):
 
 
 def kernel(signature=None, **options):
-    """``numba.njit(signature, **options)`` with the study's :class:`HealingCache` in place of ``cache=True``.
+    """``numba.njit(**options)`` with the study's :class:`HealingCache` in place of ``cache=True``.
 
-    Used as ``@kernel()`` or ``@kernel(SIGNATURE, ...)``; with a signature the function compiles (or loads) at
-    once and only for it, as with ``njit``."""
+    Used as ``@kernel()`` (compiled for the types of each call, as ``njit``) or ``@kernel(SIGNATURE, ...)``: then the
+    function compiles (or loads) for its signature only, as with ``njit(SIGNATURE)``, but on first use
+    (:func:`_declare`), not at import."""
 
     def wrap(func):
         dispatcher = njit(**options)(func)
         dispatcher._cache = HealingCache(func)   # what njit(cache=True) does (Dispatcher.enable_caching)
         if signature is not None:
-            dispatcher.compile(signature)
-            dispatcher.disable_compile()
+            _declare(dispatcher, signature)
         return dispatcher
     return wrap
+
+
+def _declare(dispatcher, signature) -> None:
+    """Make ``dispatcher`` compile (or load) for ``signature`` alone, on first use: every way numba asks a dispatcher
+    for code (a call from Python, a call from compiled code being typed, its use as a first-class function) compiles
+    the declared signature first and then disables compilation, so each use finds that one overload (or converts
+    its arguments to it, or is refused) exactly as after ``njit(SIGNATURE)``. The compile lock is the caller's to
+    take (:func:`compile_lock`)."""
+
+    def ensure():
+        if dispatcher._can_compile:
+            with global_compiler_lock:
+                if dispatcher._can_compile:
+                    dispatcher.compile(signature)
+                    dispatcher.disable_compile()
+
+    get_call_template, get_compile_result = dispatcher.get_call_template, dispatcher.get_compile_result
+
+    def call_template(args, kws):
+        ensure()
+        return get_call_template(args, kws)
+
+    def compile_result(sig):
+        ensure()
+        return get_compile_result(sig)
+
+    def compile_for_args(*args, **kws):   # numba's C dispatcher found no overload for a call from Python
+        ensure()
+        return lambda *a, **k: dispatcher(*a, **k)   # called again with the args: the declared overload, or refused
+
+    dispatcher.get_call_template, dispatcher.get_compile_result = call_template, compile_result
+    dispatcher._compile_for_args = compile_for_args
 
 
 def internal():
@@ -145,11 +180,12 @@ def internal():
 
 @contextmanager
 def compile_lock():
-    """Hold an exclusive lock on numba's cache folder while the compiled path's large kernels with declared
-    signatures compile or load: the frontend's entry kernels (on first use) and a generated module's (on its load).
-    Two processes that start together (the test workers, the pipeline's) would otherwise both compile the same
-    kernels; the second waits and loads what the first saved. The small kernels with declared signatures that
-    ``study.solver`` imports (the sgn functions, the stabilization biases, the friction phases) compile outside it.
+    """Hold an exclusive lock on numba's cache folder while the compiled path's kernels compile or load: the
+    frontend's entry kernels and the kernels with declared signatures that a compiled run passes to its loop (its
+    generated ``evaluate``..., ``study.fast.frontend.compile_kernels``), each on first use. Two processes that start
+    together (the test workers, the pipeline's) would otherwise both compile the same kernels; the second waits and
+    loads what the first saved. The small kernels that the reference path calls from Python (the sgn functions, the
+    stabilization biases, the friction phases) compile on first use outside it.
     Where ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result. The
     folder is checked first (:func:`numba_dir`)."""
     try:

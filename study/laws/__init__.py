@@ -2,8 +2,8 @@
 
 Every law here is a plain function on numbers and arrays: compiled with numba (``study.kernels``) for the compiled
 loop and called (compiled, or through the same source) by the reference loop; or, for the run's bookkeeping between
-segments (``events.crossing_finder`` built on a Python function, ``modes.initial_mode``, ``modes.switch``), plain
-Python that both loops call. Neither ``study.solver`` (the
+segments (``events.crossing_finder`` built on a Python function, ``modes``: the mode at t0 and after a crossing),
+plain Python that both loops call. Neither ``study.solver`` (the
 reference path) nor ``study.fast`` (the compiled path) defines a law of its own; both import them from here.
 
 The homes, one module per law:

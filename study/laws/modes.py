@@ -8,7 +8,9 @@ it has ``LOOKAHEAD`` later along the solution, :func:`initial_mode`), and a cros
 entries with :func:`signs` and :func:`settle_zeros`.
 
 Both loops return to Python at a located crossing (the compiled loop ends its segment there), so both call
-:func:`switch`, which applies the rule and bounds the number of switches; the rules on numbers are compiled kernels.
+:func:`switch`, which applies the rule and bounds the number of switches. The rules on numbers (:func:`signs`,
+:func:`settle_zeros`, :func:`flip`) are sign tests and copies that only Python calls, once per crossing: they are
+plain NumPy, not compiled kernels (compiling them cost a cold first run more CPU than all their calls take).
 """
 
 from __future__ import annotations
@@ -17,13 +19,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from study.kernels.cache import kernel
-
 MAX_EVENTS = 100_000  # more switches than this in one run means chattering on a switching surface
 LOOKAHEAD = 1e-9      # [s] a switching function zero at t0 takes the sign it has this much later
 
 
-@kernel()
 def signs(g):
     """(k,) int64: +1 where g >= 0, else -1 (the mode of switching functions g)."""
     out = np.empty(g.size, dtype=np.int64)
@@ -32,7 +31,6 @@ def signs(g):
     return out
 
 
-@kernel()
 def settle_zeros(mode, g0, g_ahead):
     """A copy of ``mode`` whose entries i < g0.size with g0[i] == 0 take the sign of g_ahead[i] (the switching
     functions ``LOOKAHEAD`` after t0)."""
@@ -43,7 +41,6 @@ def settle_zeros(mode, g0, g_ahead):
     return out
 
 
-@kernel()
 def flip(mode, i):
     """A copy of ``mode`` with entry i flipped: the mode after switching function i crossed zero."""
     out = mode.copy()
