@@ -96,8 +96,8 @@ def save_figure(fig: Figure, folder: Path, stem: str, png: bool = True) -> Path:
     The PNG is reduced to a palette of :data:`PNG_COLORS` colours (no dithering): line plots of
     thousands of noisy samples stay sharp and the file stays small enough to embed. ``png=False`` writes the SVG
     only (the report keeps a PNG rendered from the same figure key, e.g. the committed one in a fresh clone, whose
-    SVG is not committed). The SVG is drawn first in either case, so it is the same file either way (a layout
-    engine's second draw moves text by a few 1e-6 px).
+    SVG is not committed). The SVG is drawn first in either case, so it is the same file either way: drawn after
+    the PNG, it would not be (the layout engines lay out again, a 'best' legend can move by tens of px).
     """
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{stem}.png"
