@@ -29,12 +29,30 @@ def test_second_build_reuses_and_a_change_rerenders(tmp_path):
     ctx, line = build(1.0, 2)                                  # rendered in a worker process
     png = tmp_path / "figures" / "wp.png"
     assert line == "![alt](figures/wp.png)" and png.exists() and png.with_suffix(".svg").exists()
-    assert ctx.figure_stats == {"rendered": 1, "cached": 0} and (tmp_path / "figures" / FIGURE_KEYS).exists()
+    assert ctx.figure_stats == {"rendered": 1, "svg only": 0, "cached": 0} and (tmp_path / "figures" / FIGURE_KEYS).exists()
     stamp = png.stat().st_mtime_ns
     ctx, _ = build(1.0, 1)
-    assert ctx.figure_stats == {"rendered": 0, "cached": 1} and png.stat().st_mtime_ns == stamp
+    assert ctx.figure_stats == {"rendered": 0, "svg only": 0, "cached": 1} and png.stat().st_mtime_ns == stamp
     ctx, _ = build(2.0, 1)
-    assert ctx.figure_stats == {"rendered": 1, "cached": 0} and png.stat().st_mtime_ns != stamp
+    assert ctx.figure_stats == {"rendered": 1, "svg only": 0, "cached": 0} and png.stat().st_mtime_ns != stamp
     png.unlink()                                               # a missing file is rendered again
     ctx, _ = build(2.0, 1)
     assert ctx.figure_stats["rendered"] == 1 and png.exists()
+
+
+def test_a_kept_png_without_its_svg_draws_the_svg_only(tmp_path):
+    """A fresh clone has the committed PNGs and figure keys but no SVGs: the SVG is drawn, the PNG kept, and the SVG
+    is the file a full render writes."""
+    def build(workers):
+        ctx = ReportContext(tmp_path, store=None, case_lists={}, render_workers=workers)
+        ctx.figure(benchmark_work_precision_figure(_wp()), "wp", "alt")
+        ctx.finish_figures()
+        return ctx
+
+    build(1)
+    png, svg = tmp_path / "figures" / "wp.png", tmp_path / "figures" / "wp.svg"
+    full_svg, stamp = svg.read_bytes(), png.stat().st_mtime_ns
+    svg.unlink()
+    ctx = build(2)
+    assert ctx.figure_stats == {"rendered": 0, "svg only": 1, "cached": 0}
+    assert png.stat().st_mtime_ns == stamp and svg.read_bytes() == full_svg

@@ -28,6 +28,8 @@ from study.exudyn_models.building import OVT
 from study.exudyn_models.guards import GuideFriction, PinFrictionTorque, ReactionGuard
 from study.model.joints import GROUND, Description, Prismatic, Revolute
 
+_FORCE_LOCAL, _FORCE = OVT.ForceLocal, OVT.Force   # the reactions the friction laws read, looked up once
+
 #: How a friction law that reads a joint reaction (a guide's normal force, a pin's |R|) is evaluated.
 REACTION_LAW_EVALUATION = ("Python user function (reads the joint reaction through mbs.GetObjectOutput; no Exudyn "
                            "element or symbolic user function has access to it)")
@@ -66,9 +68,7 @@ def add_contact_friction(a: Assembly, j: Prismatic) -> None:
     model, built, eps = a.model, a.built, a.built.eps
     obj = model.joints[j.name][0]
     n = built.normals[j.name]
-    # N = force on the slider along the normal = -(ForceLocal . n) (= -lam); only |N| enters
-    guard = ReactionGuard(lambda mbs, o=obj, n=n: -(lambda f: f[0] * n[0] + f[1] * n[1])(
-        mbs.GetObjectOutput(o, OVT.ForceLocal)))
+    guard = ReactionGuard(_normal_force(obj, n))
     axis = (a.val(j.axis[0]), a.val(j.axis[1]))       # guide frame (= global on a guide fixed in ground)
     moving = j.guide[0] != GROUND
     fric = GuideFriction(model, a.marker(*j.slider), axis, guard, mu=a.val(j.friction.mu_kinetic),
@@ -82,11 +82,31 @@ def add_contact_friction(a: Assembly, j: Prismatic) -> None:
     built.evaluation[f"friction_{j.name}"] = REACTION_LAW_EVALUATION
 
 
+def _normal_force(obj: int, normal: tuple[float, float]):
+    """The reader of a contact's normal force N = force on the slider along the normal = -(ForceLocal . n) (= -lam)
+    of the joint ``obj``; only |N| enters. Called at every friction evaluation: Python floats, no allocation
+    beyond Exudyn's output."""
+    n0, n1 = normal
+
+    def read(mbs) -> float:
+        f = mbs.GetObjectOutput(obj, _FORCE_LOCAL).tolist()
+        return -(f[0] * n0 + f[1] * n1)
+    return read
+
+
+def _reaction_norm(obj: int):
+    """The reader of a revolute joint's reaction magnitude |R| = hypot(Rx, Ry) (``obj``'s global 'Force')."""
+    def read(mbs) -> float:
+        f = mbs.GetObjectOutput(obj, _FORCE).tolist()
+        return math.hypot(f[0], f[1])
+    return read
+
+
 def add_pin_friction(a: Assembly, j: Revolute, delta: float) -> None:
     """The regularized friction torque of a pin on its bodies (its opposite on the second; nothing on ground)."""
     model, built = a.model, a.built
     obj = model.joints[j.name][0]
-    guard = ReactionGuard(lambda mbs, o=obj: math.hypot(*mbs.GetObjectOutput(o, OVT.Force)[:2]))
+    guard = ReactionGuard(_reaction_norm(obj))
     sides = (j.a[0], j.b[0])
     fric = PinFrictionTorque(model, tuple(None if b == GROUND else model.node(b) for b in sides), guard,
                        coefficient=a.val(j.friction.mu_kinetic) * a.val(j.radius),

@@ -21,6 +21,8 @@ from study.kernels.signs import SIGN_FUNCTIONS
 from study.laws.friction import friction_level, pin_norm
 
 OVT = exu.OutputVariableType
+# the output types the user functions read at every call, looked up once
+_POSITION, _VELOCITY, _COORDINATES, _ANGULAR_VELOCITY = OVT.Position, OVT.Velocity, OVT.Coordinates, OVT.AngularVelocity
 #: the friction laws' one home (see the module docstring)
 LEVEL, NORM, SLIP = friction_level.py_func, pin_norm.py_func, SIGN_FUNCTIONS["tanh"]
 
@@ -110,35 +112,39 @@ class GuideFriction(RecordedFriction):
         self.marker = marker
         self.axis = (float(axis[0]), float(axis[1]))
         self.mu, self.resistance, self.eps = float(mu), float(resistance), float(eps)
+        self._resistance_level = LEVEL(0.0, 0.0, self.resistance)
         self.guide = guide
 
     def __call__(self, mbs, t, load_vector):
         if self.guide is not None:
             f, axis, _ = self._moving(mbs, record=True)
             return [f * axis[0], f * axis[1], 0.0]
-        vel = mbs.GetMarkerOutput(self.marker, OVT.Velocity)
-        v = self.axis[0] * vel[0] + self.axis[1] * vel[1]
+        vx, vy, _ = mbs.GetMarkerOutput(self.marker, _VELOCITY).tolist()
+        ax, ay = self.axis
+        v = ax * vx + ay * vy
         n = self.guard.value(mbs)
         coulomb, resistance = self.law(n, v)
         self.last = (n, v, coulomb, resistance)
         f = coulomb + resistance
-        return [f * self.axis[0], f * self.axis[1], 0.0]
+        return [f * ax, f * ay, 0.0]
 
     def law(self, n: float, v: float) -> tuple[float, float]:
         """(Coulomb part, resistance) of the tangential force at normal force n and sliding velocity v: the level
-        mu |N| and the level R, each times -tanh(v/eps)."""
+        mu |N| and the level R (constant: evaluated once, in ``__init__``), each times -tanh(v/eps)."""
         s = SLIP(v, self.eps)
-        return -LEVEL(self.mu, n, 0.0) * s, -LEVEL(0.0, 0.0, self.resistance) * s
+        return -LEVEL(self.mu, n, 0.0) * s, -self._resistance_level * s
 
     def _moving(self, mbs, record: bool):
         """(tangential force f on the slider, global axis, lever r_S - r_G) at the current state, moving guide."""
         node, reference, com = self.guide
-        angle = reference + mbs.GetNodeOutput(node, OVT.Coordinates)[2]
-        omega = mbs.GetNodeOutput(node, OVT.AngularVelocity)[2]
+        angle = reference + mbs.GetNodeOutput(node, _COORDINATES).tolist()[2]
+        omega = mbs.GetNodeOutput(node, _ANGULAR_VELOCITY).tolist()[2]
         c, s_ = math.cos(angle), math.sin(angle)
-        axis = (c * self.axis[0] - s_ * self.axis[1], s_ * self.axis[0] + c * self.axis[1])
-        rs, vs = mbs.GetMarkerOutput(self.marker, OVT.Position), mbs.GetMarkerOutput(self.marker, OVT.Velocity)
-        rg, vg = mbs.GetMarkerOutput(com, OVT.Position), mbs.GetMarkerOutput(com, OVT.Velocity)
+        ax, ay = self.axis
+        axis = (c * ax - s_ * ay, s_ * ax + c * ay)
+        get = mbs.GetMarkerOutput
+        rs, vs = get(self.marker, _POSITION).tolist(), get(self.marker, _VELOCITY).tolist()
+        rg, vg = get(com, _POSITION).tolist(), get(com, _VELOCITY).tolist()
         lever = (rs[0] - rg[0], rs[1] - rg[1])
         v = axis[0] * (vs[0] - vg[0] + omega * lever[1]) + axis[1] * (vs[1] - vg[1] - omega * lever[0])
         n = self.guard.value(mbs) if record else self.guard.peek(mbs)
@@ -177,8 +183,9 @@ class PinFrictionTorque(RecordedFriction):
 
     def torque(self, mbs, record: bool) -> float:
         """tau (the torque on body a) at the current state; ``record``: count the guard's call and keep ``last``."""
-        rates = [0.0 if n is None else mbs.GetNodeOutput(n, OVT.AngularVelocity)[2] for n in self.nodes]
-        omega = rates[0] - rates[1]
+        a, b = self.nodes
+        omega = ((0.0 if a is None else mbs.GetNodeOutput(a, _ANGULAR_VELOCITY).tolist()[2])
+                 - (0.0 if b is None else mbs.GetNodeOutput(b, _ANGULAR_VELOCITY).tolist()[2]))
         r = self.guard.value(mbs) if record else self.guard.peek(mbs)
         tau = -LEVEL(self.coefficient, NORM(r, 0.0, self.delta), self.resistance) * SLIP(omega, self.eps)
         if record:

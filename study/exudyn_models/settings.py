@@ -232,6 +232,11 @@ def simulation_settings(grid: RunGrid, solver: str, loads_jacobian: int,
     ti.computeLoadsJacobian = loads_jacobian
     s.linearSolver.solverType = LINEAR_SOLVER_TYPES[linear_solver]
     s.linearSolver.ignoreSingularJacobian = bool(ignore_singular)
+    # Reuse the sparse matrix's analyzed pattern (its column ordering) from one factorization to the next; Exudyn
+    # analyzes again when the number of nonzeros changes, and when a factorization with the reused pattern fails.
+    # Measured on the N-four-bar at N = 40 (index 3, h = 1e-3, 4 s): the same results bit for bit, about 15 % less
+    # CPU (factorization was 39 % of the run). The dense solvers have no pattern.
+    s.linearSolver.reuseAnalyzedPattern = linear_solver == "sparse"
     s.solution.file.write = False            # no solution/coordinatesSolution.txt
     s.solution.sensors.writePeriod = 0.5 * grid.h   # < h: store every step (storage follows writePeriod)
     return s

@@ -45,7 +45,7 @@ class ReportContext:
     figures_written: list[Path] = field(default_factory=list)
     inputs: list[Path] = field(default_factory=list)
     render_workers: int = 0                # > 1: figures are rendered in that many processes
-    figure_stats: dict = field(default_factory=lambda: {"rendered": 0, "cached": 0})
+    figure_stats: dict = field(default_factory=lambda: {"rendered": 0, "svg only": 0, "cached": 0})
     _pending: list = field(default_factory=list)
     _pool: Executor | None = None
     _keys: dict | None = None
@@ -97,7 +97,8 @@ class ReportContext:
 
         Cached by the hash of the figure's content (:func:`figure_key`): when ``figures/<stem>.png``
         and ``.svg`` exist and were rendered from the same key (``figures/figure_keys.json``), they are
-        kept as they are. Otherwise the figure is rendered, in a worker process when
+        kept as they are; when only the PNG is there (a fresh clone: the SVGs are not committed), only the SVG is
+        drawn. Otherwise the figure is rendered, in a worker process when
         ``render_workers > 1`` (call :meth:`finish_figures` before reading the files).
         """
         import matplotlib.pyplot as plt
@@ -107,18 +108,19 @@ class ReportContext:
         self.figures_written.append(png)
         key = figure_key(fig)
         keys = self._figure_keys()
-        if keys.get(stem) == key and png.exists() and png.with_suffix(".svg").exists():
+        png_kept = keys.get(stem) == key and png.exists()   # rendered from this key (a fresh clone has no SVGs)
+        if png_kept and png.with_suffix(".svg").exists():
             self.figure_stats["cached"] += 1
             plt.close(fig)
             return f"![{alt}](figures/{png.name})"
         keys.pop(stem, None)
-        self.figure_stats["rendered"] += 1
+        self.figure_stats["svg only" if png_kept else "rendered"] += 1
         if self.render_workers > 1:
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(self.render_workers)
-            self._pending.append((stem, key, self._pool.submit(save_figure, fig, folder, stem)))
+            self._pending.append((stem, key, self._pool.submit(save_figure, fig, folder, stem, not png_kept)))
         else:
-            save_figure(fig, folder, stem)
+            save_figure(fig, folder, stem, not png_kept)
             keys[stem] = key
         plt.close(fig)
         return f"![{alt}](figures/{png.name})"

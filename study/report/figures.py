@@ -90,24 +90,30 @@ def _style() -> Iterator[None]:
         yield
 
 
-def save_figure(fig: Figure, folder: Path, stem: str) -> Path:
-    """Write ``<stem>.png`` (dpi :data:`DPI`) and ``<stem>.svg`` into ``folder``; returns the PNG path.
+def save_figure(fig: Figure, folder: Path, stem: str, png: bool = True) -> Path:
+    """Write ``<stem>.svg`` and then ``<stem>.png`` (dpi :data:`DPI`) into ``folder``; returns the PNG path.
 
     The PNG is reduced to a palette of :data:`PNG_COLORS` colours (no dithering): line plots of
-    thousands of noisy samples stay sharp and the file stays small enough to embed.
+    thousands of noisy samples stay sharp and the file stays small enough to embed. ``png=False`` writes the SVG
+    only (the report keeps a PNG rendered from the same figure key, e.g. the committed one in a fresh clone, whose
+    SVG is not committed). The SVG is drawn first in either case, so it is the same file either way: drawn after
+    the PNG, it would not be (the layout engines lay out again, a 'best' legend can move by tens of px).
     """
     folder.mkdir(parents=True, exist_ok=True)
-    png = folder / f"{stem}.png"
+    path = folder / f"{stem}.png"
     buffer = io.BytesIO()
     with _style():
-        fig.savefig(buffer, dpi=DPI, format="png")
         fig.savefig(folder / f"{stem}.svg", format="svg", metadata={"Date": None, "Creator": None})
+        if png:
+            fig.savefig(buffer, dpi=DPI, format="png")
+    if not png:
+        return path
     buffer.seek(0)
     with Image.open(buffer) as image:
         paletted = image.convert("RGB").quantize(colors=PNG_COLORS, method=Image.Quantize.MEDIANCUT,
                                                  dither=Image.Dither.NONE)
-    paletted.save(png, format="PNG", optimize=True)
-    return png
+    paletted.save(path, format="PNG", optimize=True)
+    return path
 
 
 def _positive(values: np.ndarray) -> np.ndarray:
