@@ -160,6 +160,10 @@ sweep = { max_evaluations = [5] }
     table = pl.failures_table([pl.load_case_list(path)], store).set_index("case")
     assert table.loc["demo/g [max_evaluations=5]", "expected"]
     assert not table.loc["demo/other [max_evaluations=5]", "expected"]
+    # a second run takes the recorded expected stop as the case's result; the unexpected failure runs again
+    again = pl.run_cases(cases, store, pl.InlineExecutor())
+    assert again.expected == out.expected and (again.cached, again.computed) == (2, 0)   # the finished run, the record
+    assert list(again.failed) == ["demo/other [max_evaluations=5]"]
 
 
 @pytest.mark.parametrize("value", ["", 3, "not a name"])

@@ -160,6 +160,15 @@ def _outcomes(executor: Executor, todo: list[Case], seconds: Mapping[str, float]
             future.cancel()
 
 
+def _expected_failure(store: Store, case: Case) -> str | None:
+    """The recorded error of ``case`` if it is the one its case list expects (``expect_error``), else None."""
+    failure = store.failure(case) if case.expect_error else None
+    if failure is None or failure.get("key") != case.key():
+        return None
+    error = str(failure.get("error", ""))
+    return error if error.split(":", 1)[0] == case.expect_error else None
+
+
 def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: str = "cases",
               stream=None, seconds: Mapping[str, float] | None = None, announce: Announce | None = None) -> RunSummary:
     """Run every case without a saved result on ``executor``; save each as it completes.
@@ -169,8 +178,10 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     list order); it returns the run's progress callback (the time reached) or None.
 
     Identical cases (same key) run once. A case that raises is recorded (``Store.record_failure``)
-    and the others go on. On KeyboardInterrupt the pending cases are cancelled; finished results
-    stay saved, so a rerun resumes.
+    and the others go on. A case whose case list expects it to stop with an error, and whose failure with that
+    error is recorded under its key (the same code and inputs: the run is deterministic, its bounds are counts),
+    is not run again: the record is its result. On KeyboardInterrupt the pending cases are cancelled; finished
+    results stay saved, so a rerun resumes.
     """
     unique: dict[str, Case] = {}
     for case in cases:
@@ -181,6 +192,10 @@ def run_cases(cases: Iterable[Case], store: Store, executor: Executor, title: st
     for c in unique.values():
         why = store.problem(c)
         if why is None:
+            continue
+        recorded = _expected_failure(store, c) if why == "not saved" else None
+        if recorded is not None:
+            summary.expected[c.name] = recorded
             continue
         if why != "not saved":  # a damaged result is reported and recomputed, never reused
             print(f"{c.name}: saved result rejected, recomputing: {why}", file=stream)
