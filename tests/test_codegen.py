@@ -20,6 +20,7 @@ from study.params import load_parameters
 from study.reference_data import tolerance
 from study.spatial import spatial_equations
 from study.spatial.bricard import bricard
+from study.spatial.heavy_top import heavy_top
 
 X, Y = sp.symbols("x y")
 
@@ -42,6 +43,26 @@ def test_zero_targets_are_left_out_only_when_asked():
     targets = [("a", X * 0), ("b", X + 1)]
     assert [line.split(" = ")[0].strip() for line in block_lines(targets, "", skip_zeros=True)] == ["b"]
     assert _run(block_lines(targets, ""), x=2.0)["a"] == 0
+
+
+def test_a_planar_block_is_sympys_basic_cse_and_a_spatial_one_skips_factor_terms():
+    """The prepared (memoized) expressions give exactly sp.cse(optimizations="basic") when factored (planar systems:
+    their generated code and tables do not move), and sp.cse with sub_pre/sub_post only when not (spatial ones)."""
+    from sympy.simplify.cse_opts import sub_post, sub_pre
+
+    from study.model.codegen import _PRINTER
+
+    b = lower(description(load_parameters("slider_crank")), "relative")
+    system = planar_system(b, derive(b))
+    assert system.factored and not spatial_equations(heavy_top()).system.factored
+    targets = [(f"M{i}", e) for i, e in enumerate(system.mass)] + [(f"Q{i}", e) for i, e in
+                                                                     enumerate(system.velocity_terms)]
+    for factored, optimizations in ((True, "basic"), (False, [(sub_pre, sub_post)])):
+        replacements, reduced = sp.cse([e for _, e in targets], symbols=sp.numbered_symbols("x_"),
+                                       optimizations=optimizations)
+        expected = [f"{x} = {_PRINTER.doprint(e)}" for x, e in replacements]
+        assert block_lines(targets, "", factored=factored) == \
+            expected + [f"{name} = {_PRINTER.doprint(e)}" for (name, _), e in zip(targets, reduced)]
 
 
 def test_both_targets_begin_with_the_generated_code_header():

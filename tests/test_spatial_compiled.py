@@ -12,11 +12,14 @@ from test_spatial_heavy_top import test_every_stabilization_holds_the_norm_row_a
 from test_spatial_heavy_top import \
     test_every_stabilization_matches_the_published_and_the_independent_euler_parameters as matches_references
 
+import study
+from study.engines import RK4
 from study.fast.frontend import user_model
 from study.model.compile import GeneratedEquations
 from study.reference_data import tolerance
 from study.simulate import simulate
 from study.spatial.bricard import bricard_start
+from study.spatial.heavy_top import heavy_top_mechanism
 
 RTOL = 1e-12   # the reference test's runs' tolerance; the bound of [spatial_heavy_top_independent] rests on it
 
@@ -63,6 +66,21 @@ def test_both_backends_agree_to_round_off_with_the_same_fixed_steps(top, method)
     kw = dict(t_end=steps * h, method=method, integrator="RK4", step=h, output_step=steps * h / 10)
     fast, ref = simulate(eom, q0, qd0, backend="compiled", **kw), simulate(eom, q0, qd0, **kw)
     assert fast.meta["backend"] == "compiled" and len(fast.t) == len(ref.t) == 11
+    assert np.abs(fast.q - ref.q).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.q).max()
+    assert np.abs(fast.qd - ref.qd).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.qd).max()
+
+
+def test_study_run_takes_a_spatial_mechanism_on_both_backends():
+    """study.run routes a SpatialMechanism (the catalogue's heavy top, the system of ``top``: its kernels are
+    compiled once for this file) to the compiled path's generated kernels: RK4 with backend_sample_steps equal steps
+    on both backends differ by round-off only (fast_fixed_step_agreement's reason). The same on the spatial
+    slider-crank, every joint kind but a 55 kB module to compile, is in the slow suite
+    (tests/test_spatial_slider_crank.py)."""
+    h, steps = 1e-4, int(tolerance("backend_sample_steps"))
+    fast, ref = [study.run(heavy_top_mechanism(), study.InHouse(integrator=RK4(h=h), backend=backend,
+                                                                output_step=steps * h / 10), steps * h)
+                 for backend in ("compiled", "reference")]
+    assert fast.meta["backend"] == "compiled" and ref.meta["backend"] == "reference" and len(fast.t) == len(ref.t) == 11
     assert np.abs(fast.q - ref.q).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.q).max()
     assert np.abs(fast.qd - ref.qd).max() <= tolerance("fast_fixed_step_agreement") * np.abs(ref.qd).max()
 

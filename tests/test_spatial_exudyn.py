@@ -6,6 +6,8 @@ reference/tolerances.toml ([spatial_exudyn_richardson]), each with its reason.""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -59,7 +61,7 @@ def moving_state(d: SpatialDescription):
 
 @pytest.fixture(scope="module")
 def moving_linkage():
-    return moving_state(linkage())
+    return moving("linkage")
 
 
 def slides():
@@ -104,6 +106,12 @@ UNLOADED = {"linkage": {"weld_x"}}
 MOVING = {"linkage": lambda: moving_state(linkage()), "slides": slides_start, "cardan": loaded_cardan_start}
 
 
+@functools.cache
+def moving(name: str):
+    """MOVING[name]() built once in a test process: the linkage's derivation serves this file's every test."""
+    return MOVING[name]()
+
+
 @pytest.mark.parametrize("name", MOVING)
 def test_initial_multipliers_and_accelerations_match_the_inhouse_solve(name):
     """Exudyn's initial-acceleration solve against the in-house saddle point [[M, J^T], [J, 0]], row by row (every
@@ -111,7 +119,7 @@ def test_initial_multipliers_and_accelerations_match_the_inhouse_solve(name):
     numerically differentiated velocity term separates them (cross_validation.toml [reaction_velocity_term_relative],
     relative to the part gamma produces, here its largest entry: a row whose own gamma part is zero by coincidence
     still carries the difference; it grows as |qd|^2, 4.0 times at twice the velocities, and vanishes at rest)."""
-    d, eom, q0, qd0 = MOVING[name]()
+    d, eom, q0, qd0 = moving(name)
     qdd, lam = Multiplier().solve(eom.mass(q0), eom.forces(0.0, q0, qd0), eom.phi_q(q0), eom.gamma(q0, qd0))
     qdd_g, lam_g = Multiplier().solve(eom.mass(q0), np.zeros(len(q0)), eom.phi_q(q0), eom.gamma(q0, qd0))
     r = run_spatial(d, eom, q0, qd0, 0.002, 1e-3)

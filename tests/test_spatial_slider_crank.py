@@ -49,9 +49,12 @@ def test_a_planar_description_is_never_a_spatial_mechanism_nor_the_reverse(examp
         study.Mechanism(example.slider_crank.description, q0={"x": 0.0})
 
 
+@pytest.mark.slow
 def test_study_run_takes_the_spatial_mechanism_on_both_backends(example):
     """study.run routes a SpatialMechanism to the compiled path's generated spatial equations: RK4 with
-    backend_sample_steps equal steps on both backends differ by round-off only (fast_fixed_step_agreement's reason)."""
+    backend_sample_steps equal steps on both backends differ by round-off only (fast_fixed_step_agreement's reason).
+    Slow: compiling this mechanism's module (55 kB) is most of a cold `make test`'s longest file; the fast suite
+    checks the same route on the heavy top (tests/test_spatial_compiled.py)."""
     from study.engines import RK4
 
     h = 1e-3
