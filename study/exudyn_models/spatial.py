@@ -29,8 +29,8 @@ is Exudyn's algebraic coordinate of the matching equation (JOINT_ROWS: the same 
 with the sign -1 where Exudyn's row is the description's with its two vectors swapped, whose gradients are opposite
 on the constraint manifold). A revolute with friction has its position rows in body b's joint frame
 (:mod:`study.spatial.joints`) while Exudyn's are the gap's global components: their multipliers are Exudyn's turned
-by (A_b R_b)^T (:func:`framed_multipliers`). A norm row p^T p - 1 has no physical reaction and its multiplier depends on the
-formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`; Exudyn's own Euler-parameter
+by (A_b R_b)^T (:func:`framed_multipliers`). A norm row p^T p - 1 has no physical reaction and its multiplier depends
+on the formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`; Exudyn's own Euler-parameter
 multiplier stays 0): the result carries the in-house convention's value, the p-block's component along p of
 Q - M qdd - Phi_q,joints^T lam on Exudyn's state, divided by 2 p^T p. Energies: kinetic from Exudyn's centre
 velocities and body-frame angular velocities, potential -sum m g . r, and work_<load> the trapezoidal integral of
