@@ -79,8 +79,8 @@ JOINT_ROWS = {
     Universal: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("h", 3, 1.0)),
     Distance: (("length", 0, 1.0),),
 }
-#: a revolute with friction: its three position rows in body b's joint frame, from Exudyn's global rows 0, 1, 2
-#: (:func:`framed_multipliers`), in place of the revolute's x, y, z
+#: a revolute with friction in the equations: its three position rows in body b's joint frame, from Exudyn's global
+#: rows 0, 1, 2 (:func:`framed_multipliers`), in place of the revolute's x, y, z
 FRAMED_ROWS = ("tx", "ty", "tz")
 NORM_NOTE = ("the norm rows' multipliers are the in-house convention's (Exudyn's Euler-parameter multiplier belongs "
              "to its own mass matrix): the p-block's component along p of Q - M qdd - Phi_q,joints^T lam on Exudyn's "
@@ -247,15 +247,17 @@ def build(d: SpatialDescription, q0, qd0, friction: str = "regularized", eps: fl
 
 def joint_multipliers(b: SpatialBuilt, eom: EquationsOfMotion, ae: Array, q: Array) -> tuple[Array, list[int]]:
     """(n, r) multipliers of the joint rows, in ``eom.constraint_names`` order, from Exudyn's algebraic coordinates
-    ``ae`` at the states ``q`` (norm rows left 0), and the indices of the norm rows. A revolute with friction has its
-    position rows in body b's joint frame (``_tx``, ``_ty``, ``_tz``, :mod:`study.spatial.joints`): FRAMED_ROWS."""
+    ``ae`` at the states ``q`` (norm rows left 0), and the indices of the norm rows. A revolute whose rows in
+    ``eom`` are in body b's joint frame (``_tx``, ``_ty``, ``_tz``: the equations of a description with its friction,
+    :mod:`study.spatial.joints`) takes FRAMED_ROWS; one with ``_x``, ``_y``, ``_z`` (the equations without it) the
+    global rows as they are."""
     names = eom.constraint_names
     lam = np.zeros((ae.shape[0], len(names)))
     sources, framed = {}, []
     for j in b.d.joints:
         ltg = list(b.model.mbs.systemData.GetObjectLTGAE(b.joints[j.name]))
         rows = JOINT_ROWS[type(j)]
-        if isinstance(j, Revolute) and j.name in b.d.frictions:
+        if isinstance(j, Revolute) and f"{j.name}_{FRAMED_ROWS[0]}" in names:
             framed.append((j, [names.index(f"{j.name}_{suffix}") for suffix in FRAMED_ROWS], ltg[:3]))
             rows = rows[3:]
         for suffix, index, sign in rows:
