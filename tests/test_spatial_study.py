@@ -146,3 +146,18 @@ def test_the_section_reads_the_friction_tables(tmp_path):
     assert "The exact law in-house (DOP853 rtol=1e-10 none, 2 s) sticks slide at 0.3 s;" in text
     assert ("q, joint multipliers, friction_slide, work_friction_slide, energy balance: observed orders 2 to 2; "
             "qd: no discretization error (every error at most its floor); normal_slide: **below min_order**") in text
+
+
+def test_the_carriage_cases_take_the_reference_files_steps_and_width():
+    """The case list's friction_carriage groups run at reference/spatial/friction_carriage.toml's [exudyn_steps] and
+    [eps] (whose reasons are the steps' and the width's), the regularized in-house run at the same eps."""
+    from study.pipeline import CASES_DIR, load_case_list
+    from study.reference_data import values
+
+    cases = [c for c in load_case_list(CASES_DIR / "spatial.toml").cases if c.mechanism == "friction_carriage"]
+    exudyn = [c for c in cases if c.engine == "exudyn"]
+    assert sorted(c.kwargs["h"] for c in exudyn) == sorted(values("exudyn_steps", "spatial/friction_carriage"))
+    eps = tolerance("eps", "spatial/friction_carriage")
+    assert {c.kwargs["eps"] for c in exudyn} == {eps}
+    assert [c.kwargs["friction_eps"] for c in cases if c.kwargs.get("friction") == "regularized" and
+            c.engine == "inhouse"] == [eps]
