@@ -174,9 +174,9 @@ def joint_friction(ctx: ReportContext, timing: pd.DataFrame | None) -> list[str]
                       f"the carriage slides back through the band) over {fmt_number(ref['t_end'])} s, Exudyn {solver} "
                       f"at h = "
                       f"{', '.join(fmt_number(h) for h in sorted(set(rows['h']), reverse=True))} s against the "
-                      f"in-house run ({ref['setting']}): {_orders_sentence(rows)} (min_order "
-                      f"{fmt_number(tolerance('min_order', 'cross_validation'))}, cross_validation.toml; "
-                      f"Exudyn's energy balance as its own error).", ""]
+                      f"in-house run ({ref['setting']}): {_orders_sentence(rows)}. min_order = "
+                      f"{fmt_number(tolerance('min_order', 'cross_validation'))} (cross_validation.toml); for the "
+                      f"energy balance the error is Exudyn's own balance error.", ""]
     columns = {"engine": "engine", "setting": "setting", "law": "law", "t_end": "t_end [s]",
                "energy_balance_error": "energy balance error [J]", "dissipated_J": "dissipated by friction [J]"}
     if "cpu_s" in runs:
