@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from study.compare import observed_orders
 from study.exudyn_models.spatial import run_spatial
@@ -18,6 +19,7 @@ from study.mechanisms import named_mechanism
 from study.reference_data import tolerance
 from study.simulate import simulate
 from study.solver.accelerations import Multiplier
+from study.spatial import GROUND, SpatialDescription, initial_state, spatial_equations
 
 CARRIAGE = "spatial/friction_carriage"
 EPS = tolerance("eps", CARRIAGE)
@@ -44,6 +46,16 @@ def inhouse(eom, q0, qd0, t_end: float, output_step: float):
                     friction="regularized", friction_eps=EPS)
 
 
+def initial_bands(eom, q0, qd0, ref):
+    """The t = 0 bands of tests/test_spatial_exudyn.py around the in-house run ``ref``: reaction_zero_velocity_relative
+    of each multiplier plus reaction_velocity_term_relative of the largest multiplier that gamma produces; the same
+    for the accelerations (their largest entries)."""
+    qdd_g, lam_g = Multiplier().solve(eom.mass(q0), np.zeros(len(q0)), eom.phi_q(q0), eom.gamma(q0, qd0))
+    rel, vel = tol("reaction_zero_velocity_relative"), tol("reaction_velocity_term_relative")
+    return (rel * np.abs(ref.lam[0]) + vel * np.abs(lam_g).max(),
+            rel * np.abs(ref.qdd[0]).max() + vel * np.abs(qdd_g).max())
+
+
 def test_initial_multipliers_with_joint_friction_match_the_inhouse_solve(carriage):
     """At t = 0, row by row (the axle's rows in body b's joint frame, both norm rows in the in-house convention) and
     in the accelerations, Exudyn's initial-acceleration solve against the in-house one with the same friction law
@@ -54,20 +66,44 @@ def test_initial_multipliers_with_joint_friction_match_the_inhouse_solve(carriag
     d, eom, q0, qd0 = carriage
     ref = inhouse(eom, q0, qd0, 0.002, 0.002)
     r = run_spatial(d, eom, q0, qd0, 0.002, 1e-3, eps=EPS)
-    qdd_g, lam_g = Multiplier().solve(eom.mass(q0), np.zeros(len(q0)), eom.phi_q(q0), eom.gamma(q0, qd0))
     qdd_0, lam_0 = Multiplier().solve(eom.mass(q0), eom.forces(0.0, q0, qd0), eom.phi_q(q0), eom.gamma(q0, qd0))
-    lam, qdd = ref.lam[0], ref.qdd[0]
-    rel, vel = tol("reaction_zero_velocity_relative"), tol("reaction_velocity_term_relative")
-    band = rel * np.abs(lam) + vel * np.abs(lam_g).max()
+    band, qdd_band = initial_bands(eom, q0, qd0, ref)
+    lam = ref.lam[0]
     loaded = [k for k, n in enumerate(eom.constraint_names) if not n.endswith("_norm") and n not in UNLOADED]
     assert np.all(2 * np.abs(lam[loaded]) > band[loaded])    # every loaded row: a wrong sign or frame would show
     assert np.all(np.abs(r.lam[0] - lam) <= band), (r.lam[0], lam)
     assert np.any(np.abs(r.lam[0] - lam_0) > band)          # the friction shows: the frictionless solve is outside
-    band = rel * np.abs(qdd).max() + vel * np.abs(qdd_g).max()
-    assert np.abs(r.qdd[0] - qdd).max() <= band < np.abs(r.qdd[0] - qdd_0).max()
+    assert np.abs(r.qdd[0] - ref.qdd[0]).max() <= qdd_band < np.abs(r.qdd[0] - qdd_0).max()
     for key in ("normal_guide", "friction_guide", "normal_axle", "friction_axle"):
-        assert abs(r.forces[key][0] - ref.forces[key][0]) <= rel * abs(ref.forces[key][0]) + vel * np.abs(
-            lam_g).max(), key
+        assert abs(r.forces[key][0] - ref.forces[key][0]) <= max(band), key
+
+
+@pytest.mark.parametrize("ground_first", [False, True], ids=["ground_as_body_b", "ground_as_body_a"])
+def test_a_pin_to_ground_maps_its_joint_frame_rows_either_way_round(ground_first):
+    """A wheel on a revolute joint with friction to ground (axle horizontal along no global axis, a thrust along it,
+    turning at 20 rad/s), ground as the joint's body b or its body a: the rows' frame is then ground's or the
+    wheel's, and Exudyn's global multipliers turn into it from the wheel's centre's gradient (body a) or minus it
+    (body b). At t = 0 every row and the friction torque match the in-house solve within the bands above."""
+    axle = np.array([np.cos(0.5), np.sin(0.5), 0.0])
+    hub = np.array([0.1, 0.2, 0.3])
+    d = SpatialDescription("friction_wheel")
+    d.body("wheel", 2.0, (0.04, 0.04, 0.05), points={"hub": (0.0, 0.0, 0.0)}, axes={"axle": (0, 0, 1)})
+    pair = [("wheel", "hub", "axle"), (GROUND, tuple(hub), tuple(axle))]
+    d.revolute("bearing", *(pair[::-1] if ground_first else pair))
+    d.gravity((0.0, 0.0, -9.81))
+    d.force("thrust", "wheel", "hub", tuple(30.0 * axle))
+    d.friction("bearing", 0.3, 0.2, radius=0.05)
+    eom = spatial_equations(d)
+    x, y, z, w = Rotation.align_vectors([axle], [[0.0, 0.0, 1.0]])[0].as_quat()
+    q0, qd0 = initial_state(d, eom, {"wheel": hub}, orientations={"wheel": (w, x, y, z)},
+                            angular_velocities={"wheel": 20.0 * axle})
+    ref = inhouse(eom, q0, qd0, 0.002, 0.002)
+    r = run_spatial(d, eom, q0, qd0, 0.002, 1e-3, eps=EPS)
+    band, qdd_band = initial_bands(eom, q0, qd0, ref)
+    assert np.all(np.abs(r.lam[0] - ref.lam[0]) <= band), (r.lam[0], ref.lam[0])
+    assert np.abs(r.qdd[0] - ref.qdd[0]).max() <= qdd_band
+    assert abs(r.forces["friction_bearing"][0] - ref.forces["friction_bearing"][0]) <= max(band)
+    assert np.abs(ref.lam[0, :3]).max() > 10.0       # the position rows carry the weight and the thrust
 
 
 @pytest.fixture(scope="module")
