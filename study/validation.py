@@ -6,7 +6,7 @@ the package names it. :func:`validate` runs, from the consistent initial state o
 
 1. the in-house reference: DOP853 at the reference tolerances with post-step projection;
 2. every stabilization method (none, Baumgarte, sliding mode, projection) at everyday settings (DOP853, rtol 1e-8),
-   and, where a slider or a pin has friction, every friction treatment (exact, regularized, plain sgn with RK4);
+   and, where a slider or a joint has friction, every friction treatment (exact, regularized, plain sgn with RK4);
 3. Exudyn from the same description (:mod:`study.exudyn_models`), generalized-alpha index 3 and trapezoidal index 2,
    at three steps halving from ``h``; each against the in-house reference, with observed orders;
 4. the joint reactions of both engines.
@@ -17,8 +17,10 @@ whose mechanism is the Mechanism given) run by the pipeline's runner in this pro
 reads its runs back instead of running them again. Their differences from the reference and Exudyn's observed orders
 are computed by the cross-validation study's functions (:mod:`study.studies.cross_validation`). A copy of each run is
 saved in the report folder (``runs/``), the tables are written from the runs (``tables/``), the figures from the
-tables and the saved runs (``figures/``), and ``report.md`` from the tables. Exudyn has regularized friction only, so where a
-slider or pin has friction the comparison with Exudyn is at the regularized law (width ``friction_eps``) on both sides.
+tables and the saved runs (``figures/``), and ``report.md`` from the tables. Exudyn has regularized friction only,
+so where a slider or a joint (a planar pin, a spatial revolute or prismatic joint) has friction the comparison with
+Exudyn is at the regularized law (width ``friction_eps``, m/s for a sliding rate, rad/s for a turning one) on both
+sides.
 """
 
 from __future__ import annotations
@@ -96,7 +98,8 @@ class Settings:
 
 
 def _friction(mech: Mechanism) -> bool:
-    """Whether a slider's contact or a pin of the mechanism carries friction data."""
+    """Whether a slider's contact or a joint of the mechanism (a planar pin, a spatial revolute or prismatic joint)
+    carries friction data."""
     eom = mech.equations()
     return bool(eom.contacts or eom.pin_frictions)
 
@@ -334,7 +337,7 @@ def validate(mech: Mechanism, settings: Settings, out: str | Path,
     for name, table in result.items():
         write_table(out / "tables" / f"{name}.csv", table.to_csv(index=False), command)
     path = write_report(mech, settings, out)
-    for line in order_lines(result["exudyn_orders"], mech.equations(), settings.friction_eps):
+    for line in order_lines(result["exudyn_orders"], mech, settings.friction_eps):
         say(line)
     say(f"wrote {path} ({time.perf_counter() - t0:.0f} s)")
     return result

@@ -16,6 +16,7 @@ from study.pipeline.tables import read_table  # noqa: E402
 from study.reference_data import tolerance  # noqa: E402
 from study.report.render import fmt_number, frame_table  # noqa: E402
 from study.results import SimulationResult  # noqa: E402
+from study.spatial.elements import Prismatic  # noqa: E402
 
 
 MAX_PANELS = 8   # coordinates drawn, one panel each
@@ -92,17 +93,26 @@ def _table(df: pd.DataFrame) -> str:
     return frame_table(df.map(lambda v: fmt_number(v) if isinstance(v, (float, np.floating)) else str(v)), df)
 
 
-def _width_unit(eom) -> str:
-    """The unit of the regularized friction's width for the mechanism's friction entries ('' without friction)."""
-    units = [*(["m/s"] if eom.contacts else []), *(["rad/s"] if getattr(eom, "pin_frictions", ()) else [])]
+def _width_unit(mech: Mechanism) -> str:
+    """The unit of the regularized friction's width for the mechanism's friction entries ('' without friction): m/s
+    for a planar slider's contact and a spatial prismatic joint (a sliding rate), rad/s for a pin and a spatial
+    revolute joint (a turning rate)."""
+    if mech.kind == "spatial":
+        d = mech.description
+        kinds = {type(j) for j in d.joints if j.name in d.frictions}
+        units = [*(["m/s"] if Prismatic in kinds else []), *(["rad/s"] if kinds - {Prismatic} else [])]
+    else:
+        eom = mech.equations()
+        units = [*(["m/s"] if eom.contacts else []), *(["rad/s"] if eom.pin_frictions else [])]
     return " or ".join(units)
 
 
-def order_lines(orders: pd.DataFrame, eom, friction_eps: float) -> list[str]:
+def order_lines(orders: pd.DataFrame, mech: Mechanism, friction_eps: float) -> list[str]:
     """One line per solver and quantity: its observed orders and the verdict, with the likely cause of an order
-    below ``min_order``: with regularized friction, the law's width unresolved by the steps near sticking."""
+    below ``min_order``: with regularized friction, the law's width unresolved by the steps near sticking or a
+    reversal."""
     min_order = tolerance("min_order", table="cross_validation")
-    unit = _width_unit(eom)
+    unit = _width_unit(mech)
     lines = []
     for _, r in orders.iterrows():
         if not r["above_error_floor"]:
@@ -112,8 +122,8 @@ def order_lines(orders: pd.DataFrame, eom, friction_eps: float) -> list[str]:
             verdict = f"second order, as both solvers are (every order ≥ {min_order:g})"
         elif unit:
             verdict = (f"**below {min_order:g}**: probably the regularized friction's width (friction_eps = "
-                       f"{friction_eps:g} {unit}) is not resolved by Exudyn's steps near sticking: the law turns from "
-                       f"-mu N to +mu N over |v| < friction_eps, which a step of h crosses at once. Remedy: a larger "
+                       f"{friction_eps:g} {unit}) is not resolved by Exudyn's steps near sticking or a reversal: the law "
+                       f"turns from -mu N to +mu N over |v| < friction_eps, which a step of h crosses at once. Remedy: a larger "
                        f"friction_eps (--friction-eps), or finer steps (a smaller --h, or more --levels)")
         else:
             verdict = f"**below {min_order:g}**: a finding (an unresolved load ramp, a switch, or a mapping error)"
@@ -129,7 +139,7 @@ def write_report(mech: Mechanism, settings, out: Path) -> Path:
     figures = _figures(out, t["exudyn_convergence"], list(eom.coordinate_names))
     lines = [f"# Validation of {mech.name}", "",
              f"{eom.n_coordinates} coordinates ({', '.join(eom.coordinate_names)}), {eom.n_constraints} constraint "
-             f"rows, {len(eom.contacts)} contacts with friction; parameters `{mech.parameters.path.name}` (variant "
+             f"rows, {len(eom.contacts)} contacts and {len(eom.pin_frictions)} joints with friction; parameters `{mech.parameters.path.name}` (variant "
              f"`{mech.parameters.variant}`); horizon {settings.t_end:g} s, samples every {settings.output_step:g} s.",
              "", "## Consistent initial state", "", _table(t["initial_state"]), ""]
     methods = t["in_house"]
@@ -145,8 +155,8 @@ def write_report(mech: Mechanism, settings, out: Path) -> Path:
               "Exudyn's model is generated from the same description (`study.exudyn_models`), not from the in-house "
               "equations, and starts from the same consistent state." + (
                   f" Friction is the regularized law on both sides (width {settings.friction_eps:g} "
-                  f"{_width_unit(eom)})." if _width_unit(eom) else ""), "", _table(t["exudyn_convergence"]), ""]
-    lines += order_lines(t["exudyn_orders"], eom, settings.friction_eps) + [""]
+                  f"{_width_unit(mech)})." if _width_unit(mech) else ""), "", _table(t["exudyn_convergence"]), ""]
+    lines += order_lines(t["exudyn_orders"], mech, settings.friction_eps) + [""]
     if len(t["reactions"]):
         lines += ["## Joint reactions", "", "In-house (reference run, absolute-coordinate multipliers) against "
                   "Exudyn's joint forces (finest index-3 run):", "", _table(t["reactions"]), ""]

@@ -2,11 +2,12 @@
 physics: a block sliding on a prismatic guide along a general 3D axis, and a wheel braked by the friction of its
 bearing (issue 36 item 6).
 
-The in-house equations of a description with friction are not built on this branch (study.spatial.derive refuses
-them by name): every Exudyn result is mapped with the equations of the same description without its frictions
-(:func:`frictionless`). Friction adds neither a coordinate nor a constraint row, so these equations have the same
-coordinates, rows, Phi and applied loads; only their forces lack the friction, which the mapping adds to the norm
-rows itself. Tolerances: reference/tolerances.toml ([spatial_friction_*]) and reference/cross_validation.toml, each
+Every Exudyn result here is mapped with the equations of the same description without its frictions
+(:func:`frictionless`), so that the checks are against closed forms and saddle points written without
+study.spatial.friction: friction adds neither a coordinate nor a constraint row, so these equations have the same
+coordinates, Phi and applied loads (a revolute's position rows are the gap's global components, ``_x``, ``_y``,
+``_z``); only their forces lack the friction, which the mapping adds to the norm rows itself. The mapping with the
+equations WITH the friction (a revolute's rows in its joint frame) is tests/test_spatial_friction_carriage.py's. Tolerances: reference/tolerances.toml ([spatial_friction_*]) and reference/cross_validation.toml, each
 with its reason."""
 
 from __future__ import annotations
@@ -365,8 +366,7 @@ def test_initial_multipliers_of_pins_with_friction_match_the_saddle_point():
     ("regularized", 1e-2, False, "eps = 0.01: friction_block is spatial and has no friction entries"),
 ])
 def test_friction_options_that_mean_nothing_are_refused_by_name(friction, eps, frictions, culprit):
-    """Before any work: the mechanism's run refuses them before its equations are derived (which, on this branch,
-    refuse a description with friction themselves)."""
+    """Before any work: the mechanism's run refuses them before its equations are derived."""
     d = block(friction=frictions)
     mech = SpatialMechanism(d, positions={"block": S0 * U - TURN @ SHOE},
                             orientations={"block": wxyz(Rotation.from_matrix(TURN))})

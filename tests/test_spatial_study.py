@@ -3,14 +3,19 @@ spatial registry by name, the equal-accuracy pairing, and the section on tiny ta
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from study.mechanisms import named_mechanism
 from study.params import ParameterError
+from study.pipeline import Case
 from study.pipeline.tables import write_tables
+from study.reference_data import tolerance
 from study.report.context import ReportContext
 from study.report.sections import spatial as section
+from study.results import SimulationResult
+from study.studies import spatial_friction
 from study.studies.spatial import equal_accuracy
 
 
@@ -65,3 +70,94 @@ def test_the_section_states_sliding_modes_energy_against_its_bound(tmp_path):
 def test_the_section_says_when_the_study_has_not_run(tmp_path):
     text = "\n".join(section.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "the study `spatial` has not run" in text
+
+
+def _friction_case(group: str, engine: str, t_end: float, **options) -> Case:
+    return Case(study="spatial", group=f"carriage:{group}", engine=engine, mechanism="carriage", variant="seed",
+                t_end=t_end, options=tuple(sorted(options.items())))
+
+
+def _friction_result(t: np.ndarray, offset: float, transitions=()) -> SimulationResult:
+    """Two coordinates, one joint row and one norm row, one joint with friction: every quantity the reference's
+    plus ``offset`` (a function of the quantity's name, for the Exudyn runs' errors)."""
+    n = len(t)
+    work = -2.0 * t
+    return SimulationResult(
+        t=t, q=np.zeros((n, 2)) + offset("q"), qd=np.zeros((n, 2)) + offset("qd"), qdd=np.zeros((n, 2)),
+        lam=np.column_stack([10.0 + offset("lam") * np.ones(n), 7.0 + 5.0 * np.ones(n)]), phi=np.zeros((n, 2)),
+        phidot=np.zeros((n, 2)),
+        energies={"kinetic": 3.0 + work + offset("energy") * t, "potential": np.zeros(n),
+                  "work_friction_slide": work + offset("work")},
+        forces={"normal_slide": 10.0 + offset("normal") * np.ones(n), "friction_slide": 3.0 + offset("friction")
+                * np.ones(n)},
+        stats={"cpu_seconds": 0.1, "friction_transitions": list(transitions)},
+        meta={"constraint_names": ["slide_tx", "body_norm"], "mechanism": "carriage"})
+
+
+STEPS = (2e-3, 1e-3, 5e-4)
+
+
+def _friction_tables() -> dict[str, pd.DataFrame]:
+    """The friction tables of synthetic runs whose errors are known: C h^2 (q, the multipliers, the friction force
+    and work, Exudyn's energy balance), C h (the normal force), and under order_error_floor (qd); an exact run with
+    a stick and a slip event."""
+    t = np.linspace(0.0, 0.6, 7)
+    floor = tolerance("order_error_floor", "cross_validation")
+
+    def errors(h):
+        return lambda name: {"normal": 3.0 * h, "qd": 0.1 * floor}.get(name, 50.0 * h ** 2)
+    transitions = [{"t": 0.0, "contact": None, "initial": {}}, {"t": 0.3, "contact": "slide", "to": "stick"},
+                   {"t": 0.5, "contact": "slide", "to": "slip+"}]
+    loaded = {_friction_case("friction_exact", "inhouse", 2.0, integrator="DOP853", rtol=1e-10, friction="exact"):
+              _friction_result(t, lambda name: 0.0, transitions),
+              _friction_case("friction_reference", "inhouse", 0.6, integrator="DOP853", rtol=1e-12,
+                             friction="regularized", friction_eps=0.05): _friction_result(t, lambda name: 0.0)}
+    for h in STEPS:
+        loaded[_friction_case("friction_exudyn", "exudyn", 0.6, h=h, eps=0.05, solver="index3")] = \
+            _friction_result(t, errors(h))
+    other = _friction_case("reference", "inhouse", 0.6, integrator="DOP853", rtol=1e-12)
+    return spatial_friction.summarize([*loaded, other], loaded.__getitem__)
+
+
+def test_the_friction_tables_judge_each_quantity_by_its_order_or_its_floor():
+    """Each quantity's verdict from its known errors (C h^2: 'order >= min_order', C h: 'below min_order', under
+    the floor: 'at floor'); the exact run's located stick events only, the energy balance with the friction's work
+    and the work dissipated; a case of another group left out."""
+    tables = _friction_tables()
+    runs, orders = tables["spatial_friction"], tables["spatial_friction_orders"]
+    exact = runs[runs["group"] == "friction_exact"].iloc[0]
+    assert (exact["law"], exact["stuck_joints"], exact["stick_times"]) == ("exact", "slide", "0.3")
+    assert exact["energy_balance_error"] == 0.0 and exact["dissipated_J"] == pytest.approx(1.2)
+    assert list(runs["law"]) == ["exact", "regularized eps=0.05", *["regularized eps=0.05"] * 3]
+    verdicts = orders.groupby("quantity")["verdict"].first().to_dict()
+    assert verdicts == {"q": "order >= min_order", "qd": "at floor", "joint multipliers": "order >= min_order",
+                        "normal_slide": "below min_order", "friction_slide": "order >= min_order",
+                        "work_friction_slide": "order >= min_order", "energy balance": "order >= min_order"}
+    q = orders[orders["quantity"] == "q"].sort_values("h", ascending=False)
+    assert list(q["h"]) == list(STEPS) and np.allclose(q["max_abs_diff"], [50.0 * h ** 2 for h in STEPS])
+    assert np.allclose(q["order"].iloc[1:], 2.0)
+
+
+def test_the_section_reads_the_friction_tables(tmp_path):
+    write_tables(_friction_tables(), tmp_path, "test")
+    write_tables({"spatial_runs": pd.DataFrame([{"mechanism": "other", "engine": "inhouse", "group": "methods",
+                                                 "setting": "s"}])}, tmp_path, "test")
+    text = "\n".join(section.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
+    assert "The exact law in-house (DOP853 rtol=1e-10 none, 2 s) sticks slide at 0.3 s;" in text
+    assert ("q, joint multipliers, friction_slide, work_friction_slide, energy balance: observed orders 2 to 2; "
+            "qd: no discretization error (every error at most its floor); normal_slide: **below min_order**") in text
+
+
+def test_the_carriage_cases_take_the_reference_files_steps_and_width():
+    """The case list's friction_carriage groups run at reference/spatial/friction_carriage.toml's [exudyn_steps] and
+    [eps] (whose reasons are the steps' and the width's), the regularized in-house run at the same eps."""
+    from study.pipeline import CASES_DIR, load_case_list
+    from study.reference_data import values
+
+    cases = [c for c in load_case_list(CASES_DIR / "spatial.toml").cases if c.mechanism == "friction_carriage"]
+    exudyn = [c for c in cases if c.engine == "exudyn"]
+    assert sorted(c.kwargs["h"] for c in exudyn) == sorted(values("exudyn_steps", "spatial/friction_carriage"))
+    eps = tolerance("eps", "spatial/friction_carriage")
+    assert {c.kwargs["eps"] for c in exudyn} == {eps}
+    assert [c.kwargs["friction_eps"] for c in cases if c.kwargs.get("friction") == "regularized" and
+            c.engine == "inhouse"] == [eps]

@@ -17,7 +17,7 @@ import pytest
 
 import study
 from study.cli import main
-from study.mechanisms import mechanism
+from study.mechanisms import mechanism, named_mechanism
 from study.reference_data import tolerance
 from study.results import SimulationResult
 
@@ -132,17 +132,19 @@ def test_the_remedy_named_for_an_unresolved_width_restores_second_order(tmp_path
 
 
 def test_an_order_below_its_bound_without_friction_stays_a_finding():
-    """Without friction the width is no cause: the generic finding, with no friction remedy."""
+    """Without friction the width is no cause: the generic finding, with no friction remedy. With friction the width
+    is named in the unit of its rate: m/s for a planar slider and a spatial prismatic joint, rad/s for a spatial
+    revolute joint (friction_carriage has one of each)."""
     from study.validation_report import order_lines
 
     orders = pd.DataFrame([{"solver": "index3", "quantity": "qd", "orders": "1.2", "above_error_floor": True,
                             "meets_min_order": False}])
-    yoke = study.load_mechanism(YOKE).equations()
-    (line,) = order_lines(orders, yoke, 1e-3)
+    (line,) = order_lines(orders, study.load_mechanism(YOKE), 1e-3)
     assert "a finding" in line and "friction_eps" not in line
-    cart = study.load_mechanism(CART).equations()
-    (line,) = order_lines(orders, cart, 1e-3)
-    assert "friction_eps = 0.001 m/s" in line and "a finding" not in line
+    (line,) = order_lines(orders, study.load_mechanism(CART), 1e-3)
+    assert "friction_eps = 0.001 m/s)" in line and "a finding" not in line
+    (line,) = order_lines(orders, named_mechanism("friction_carriage"), 1e-3)
+    assert "friction_eps = 0.001 m/s or rad/s)" in line and "a finding" not in line
 
 
 # --- the validation is a case list run through the pipeline ----------------------------------------------------------

@@ -4,9 +4,11 @@ the plain sgn. Each flattens to the friction keywords of :func:`study.simulate` 
 (:func:`friction_from`).
 
 With friction, a result gains forces ``normal_<c>``, ``friction_<c>``, ``stick_<c>`` and energies
-``work_friction_<c>`` per contact; revolute joints with friction (``Description.revolute(..., friction=, radius=)``)
-follow the contacts in these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque on the joint's
-first body [N m], ``eps`` read in rad/s), with every treatment on both backends. ``eps`` of 'regularized' and
+``work_friction_<c>`` per contact; joints with friction (pins: planar revolute joints, ``Description.revolute(...,
+friction=, radius=)``, and spatial revolute and prismatic joints, ``SpatialDescription.friction``) follow the contacts
+in these outputs (``normal_<pin>`` = |R| [N], ``friction_<pin>`` = the torque [N m] of a revolute joint or the force
+[N] of a prismatic one on the joint's first body, ``eps`` read in rad/s or m/s, the unit of the joint's relative
+rate), with every treatment on both backends. ``eps`` of 'regularized' and
 'sign' is also the band |v_t| <= eps reported as apparent stick."""
 
 from __future__ import annotations
@@ -53,7 +55,8 @@ class Exact(Friction):
 
 @dataclass(frozen=True)
 class Regularized(Friction):
-    """sgn replaced by the smooth ``sgn`` ('tanh', 'sat', 'arctan', 'sqrt') of width ``eps`` [m/s; rad/s at a pin]."""
+    """sgn replaced by the smooth ``sgn`` ('tanh', 'sat', 'arctan', 'sqrt') of width ``eps`` [m/s; rad/s at a revolute
+    joint]."""
 
     eps: float = DEFAULT_EPS
     sgn: str = "tanh"

@@ -27,14 +27,18 @@ Result mapping (:func:`result`): q, qd, qdd = the nodes' coordinates (reference 
 accelerations (Exudyn's, not finite differences). lam, in ``eom.constraint_names`` order: a joint row's multiplier
 is Exudyn's algebraic coordinate of the matching equation (JOINT_ROWS: the same function of q, so the same multiplier,
 with the sign -1 where Exudyn's row is the description's with its two vectors swapped, whose gradients are opposite
-on the constraint manifold). A norm row p^T p - 1 has no physical reaction and its multiplier depends on the
-formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`; Exudyn's own Euler-parameter
+on the constraint manifold). A revolute with friction has its position rows in body b's joint frame
+(:mod:`study.spatial.joints`) while Exudyn's are the gap's global components: their multipliers are Exudyn's turned
+by (A_b R_b)^T (:func:`framed_multipliers`). A norm row p^T p - 1 has no physical reaction and its multiplier depends
+on the formulation (the in-house mass matrix adds c p p^T, :mod:`study.spatial.derive`; Exudyn's own Euler-parameter
 multiplier stays 0): the result carries the in-house convention's value, the p-block's component along p of
 Q - M qdd - Phi_q,joints^T lam on Exudyn's state, divided by 2 p^T p. Energies: kinetic from Exudyn's centre
 velocities and body-frame angular velocities, potential -sum m g . r, and work_<load> the trapezoidal integral of
 each load's power (law value . the sensed point velocity or angular velocity). A joint with friction adds
 ``normal_<joint>``, ``friction_<joint>`` and ``work_friction_<joint>``, and its friction forces' part to the norm
-rows' multipliers (:mod:`study.exudyn_models.spatial_friction`).
+rows' multipliers (:mod:`study.exudyn_models.spatial_friction`): the in-house equations hold the friction as the
+pins' generalized force P^T tau, not in ``eom.forces``, so this part is the one the in-house norm rows take up
+(tests/test_spatial_friction_carriage.py checks the two at t = 0 row by row).
 """
 
 from __future__ import annotations
@@ -75,6 +79,9 @@ JOINT_ROWS = {
     Universal: (("x", 0, 1.0), ("y", 1, 1.0), ("z", 2, 1.0), ("h", 3, 1.0)),
     Distance: (("length", 0, 1.0),),
 }
+#: a revolute with friction in the equations: its three position rows in body b's joint frame, from Exudyn's global
+#: rows 0, 1, 2 (:func:`framed_multipliers`), in place of the revolute's x, y, z
+FRAMED_ROWS = ("tx", "ty", "tz")
 NORM_NOTE = ("the norm rows' multipliers are the in-house convention's (Exudyn's Euler-parameter multiplier belongs "
              "to its own mass matrix): the p-block's component along p of Q - M qdd - Phi_q,joints^T lam on Exudyn's "
              "state, / (2 p^T p)")
@@ -238,24 +245,46 @@ def build(d: SpatialDescription, q0, qd0, friction: str = "regularized", eps: fl
     return b
 
 
-def joint_multipliers(b: SpatialBuilt, ae: Array, names) -> tuple[Array, list[int]]:
-    """(n, r) multipliers of the joint rows from Exudyn's algebraic coordinates (norm rows left 0), and the indices
-    of the norm rows."""
+def joint_multipliers(b: SpatialBuilt, eom: EquationsOfMotion, ae: Array, q: Array) -> tuple[Array, list[int]]:
+    """(n, r) multipliers of the joint rows, in ``eom.constraint_names`` order, from Exudyn's algebraic coordinates
+    ``ae`` at the states ``q`` (norm rows left 0), and the indices of the norm rows. A revolute whose rows in
+    ``eom`` are in body b's joint frame (``_tx``, ``_ty``, ``_tz``: the equations of a description with its friction,
+    :mod:`study.spatial.joints`) takes FRAMED_ROWS; one with ``_x``, ``_y``, ``_z`` (the equations without it) the
+    global rows as they are."""
+    names = eom.constraint_names
     lam = np.zeros((ae.shape[0], len(names)))
-    sources = {}
+    sources, framed = {}, []
     for j in b.d.joints:
         ltg = list(b.model.mbs.systemData.GetObjectLTGAE(b.joints[j.name]))
-        for suffix, index, sign in JOINT_ROWS[type(j)]:
+        rows = JOINT_ROWS[type(j)]
+        if isinstance(j, Revolute) and f"{j.name}_{FRAMED_ROWS[0]}" in names:
+            framed.append((j, [names.index(f"{j.name}_{suffix}") for suffix in FRAMED_ROWS], ltg[:3]))
+            rows = rows[3:]
+        for suffix, index, sign in rows:
             sources[f"{j.name}_{suffix}"] = (ltg[index], sign)
+    for j, rows, coordinates in framed:
+        lam[:, rows] = framed_multipliers(b.d, j, eom, q, ae[:, coordinates], rows)
+    done = {k for _, rows, _ in framed for k in rows}
     norms = []
     for k, row in enumerate(names):
         if row in sources:
             lam[:, k] = sources[row][1] * ae[:, sources[row][0]]
         elif row.endswith("_norm") and row[:-5] in b.d.bodies:
             norms.append(k)
-        else:
+        elif k not in done:
             raise ValueError(f"constraint row {row!r} has no Exudyn counterpart in {b.d.name!r}")
     return lam, norms
+
+
+def framed_multipliers(d: SpatialDescription, j: Revolute, eom: EquationsOfMotion, q: Array, global_: Array,
+                       rows: list[int]) -> Array:
+    """(n, 3) multipliers of the rows (A_b R_b e_k)^T gap of a revolute with friction from Exudyn's multipliers
+    ``global_`` of the gap's global components: (A_b R_b)^T times them (both sets of rows give the same force on
+    the manifold gap = 0). (A_b R_b)^T is the rows' gradient with respect to body a's centre (ground as body a:
+    minus it with respect to body b's), read off the description's own Jacobian at each state."""
+    body, sign = (j.body_a, 1.0) if j.body_a != GROUND else (j.body_b, -1.0)
+    k = 7 * list(d.bodies).index(body)
+    return np.array([sign * eom.phi_q(x)[rows, k:k + 3] @ g for x, g in zip(q, global_)])
 
 
 def norm_multipliers(eom: EquationsOfMotion, t: Array, q: Array, qd: Array, qdd: Array, lam: Array,
@@ -299,9 +328,9 @@ def result(b: SpatialBuilt, eom: EquationsOfMotion, q0: Array, grid: settings.Ru
     ae = np.array([row for _, row in b.ae], dtype=float)
     if ae.shape[0] != len(t) or np.abs(np.array([time for time, _ in b.ae]) - t).max() > 1e-9 * max(grid.t_end, 1.0):
         raise RuntimeError(f"recorded {ae.shape[0]} rows of multipliers, expected one per step ({len(t)}) on k*h")
-    lam, norms = joint_multipliers(b, ae, eom.constraint_names)
     idx = grid.output_indices
-    t, q, qd, qdd, lam = t[idx], q[idx], qd[idx], qdd[idx], lam[idx]
+    t, q, qd, qdd = t[idx], q[idx], qd[idx], qdd[idx]
+    lam, norms = joint_multipliers(b, eom, ae[idx], q)
     forces, powers, radial = spatial_friction.friction_results(b, eom, q, series, grid, stats)
     norm_multipliers(eom, t, q, qd, qdd, lam, norms, radial)
     steps = grid.h * np.arange(grid.n_steps + 1)

@@ -60,13 +60,16 @@ class SlidingContact:
 
 @dataclass(frozen=True)
 class FrictionalPin:
-    """Coulomb friction of a revolute joint whose reaction R is the multipliers of constraint rows ``rows`` (x, y).
+    """Coulomb friction of a joint whose reaction R is the multipliers of constraint rows ``rows`` (two rows: a
+    planar revolute joint's x, y; a spatial revolute joint's two rows across its axis, or a spatial prismatic joint's
+    two transverse rows, :mod:`study.spatial.friction`).
 
-    The friction torque on the relative rotation is tau = -(mu_kinetic radius |R|_delta + torque) s(omega_rel),
-    omega_rel = rate_jacobian(q) @ qd, and its generalized force rate_jacobian(q) * tau (the torque on one body,
-    minus it on the other). |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) (``pin_friction_norm_width`` in
+    The friction torque (a revolute joint) or force (a prismatic one, ``radius`` 1) on the relative motion is
+    tau = -(mu_kinetic radius |R|_delta + torque) s(omega_rel), omega_rel = rate_jacobian(q) @ qd the relative
+    angular velocity [rad/s] or sliding velocity [m/s], and its generalized force rate_jacobian(q) * tau (the load on
+    one body, minus it on the other). |R|_delta = sqrt(Rx^2 + Ry^2 + delta^2) (``pin_friction_norm_width`` in
     reference/tolerances.toml). At rest the joint holds up to mu_static radius |R|_delta + torque (the exact
-    treatment); its relative angular acceleration is rate_jacobian(q) @ qdd + rate_bias(q, qd).
+    treatment); its relative acceleration is rate_jacobian(q) @ qdd + rate_bias(q, qd).
     """
 
     name: str

@@ -11,7 +11,9 @@ criterion, its energy, and its CPU, for "CPU against Exudyn at equal accuracy".
   energy) with the drift's share of it; max|Phi| and the function evaluations or steps;
 - ``spatial_timing``: the CPU seconds of every run;
 - ``spatial_equal_accuracy_timing``: per Exudyn run, the cheapest in-house run at least as accurate, both CPUs and
-  their ratio (none when no in-house run is as accurate).
+  their ratio (none when no in-house run is as accurate);
+- the tables of the joint-friction cases (groups ``<mechanism>:friction_*``: :mod:`study.studies.spatial_friction`),
+  whose runs are in ``spatial_timing`` only.
 """
 
 from __future__ import annotations
@@ -25,22 +27,11 @@ import pandas as pd
 from study.pipeline import Case
 from study.reference_data import tolerance, values
 from study.results import SimulationResult
+from study.studies import spatial_friction
+from study.studies.spatial_cases import role, setting
 
 HEAVY_TOP = "spatial/heavy_top"
 REFERENCE_ROLE = "reference"
-
-
-def role(case: Case) -> str:
-    """The group's role, the part after ':' (reference, inhouse, methods, benchmark, exudyn)."""
-    return case.group.partition(":")[2]
-
-
-def setting(case: Case) -> str:
-    """A readable run setting: 'DOP853 rtol=1e-08 projection' or 'index3 h=0.0001'."""
-    o = case.kwargs
-    if case.engine == "exudyn":
-        return f"{o.get('solver', 'index3')} h={o['h']:g}"
-    return f"{o['integrator']} rtol={o['rtol']:g} {o.get('method', 'none')}"
 
 
 def rounds_to_published(p: np.ndarray) -> bool:
@@ -107,11 +98,14 @@ def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -
     for case in cases:
         r = load(case)
         key = {"mechanism": case.mechanism, "engine": case.engine, "group": role(case), "setting": setting(case)}
+        timing.append({**key, "cpu_s": float(r.stats["cpu_seconds"])})
+        if spatial_friction.is_friction(case):
+            continue
         rows.append({**key, "t_end_s": case.t_end, **accuracy(case, r, references.get(case.mechanism)),
                      **energy(case, r), "max_abs_phi": float(np.abs(r.phi).max()),
                      "evaluations": r.stats.get("nfev", r.stats.get("steps"))})
-        timing.append({**key, "cpu_s": float(r.stats["cpu_seconds"])})
     runs = pd.DataFrame(rows)
     cpu = pd.DataFrame(timing)
     return {"spatial_runs": runs, "spatial_timing": cpu,
-            "spatial_equal_accuracy_timing": equal_accuracy(runs.merge(cpu, on=list(cpu.columns[:-1])))}
+            "spatial_equal_accuracy_timing": equal_accuracy(runs.merge(cpu, on=list(cpu.columns[:-1]))),
+            **spatial_friction.summarize(cases, load)}

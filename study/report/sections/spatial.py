@@ -3,8 +3,10 @@
 The heavy top against the published Euler parameters and the independent minimal model; whether every stabilization
 keeps the top's energy within the global-error rule (sliding mode does not); Bricard's mechanism (A04), its energy
 over the benchmark's 10 s and the redundant row; Haug's spatial slider-crank; and the CPU of Exudyn against the
-cheapest in-house run at least as accurate. Every number is read from the study's tables (``spatial_runs``,
-``spatial_timing``, ``spatial_equal_accuracy_timing``).
+cheapest in-house run at least as accurate; the carriage with friction in its prismatic guide and its revolute axle:
+the exact law's stick times and the regularized law's convergence in Exudyn. Every number is read from the study's
+tables (``spatial_runs``, ``spatial_timing``, ``spatial_equal_accuracy_timing``, ``spatial_friction``,
+``spatial_friction_orders``).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import pandas as pd
 
 from study.report.context import ReportContext
+from study.reference_data import tolerance
 from study.report.render import fmt_number, md_table
 
 TITLE = "Spatial mechanisms"
@@ -120,6 +123,70 @@ def slider_crank(runs: pd.DataFrame) -> list[str]:
                               "energy_drift_J": "ΔE [J]", "max_abs_phi": "max abs(Φ)", "cpu_s": "CPU [s]"}), ""]
 
 
+def _orders_sentence(orders: pd.DataFrame) -> str:
+    """Which quantities converge at order >= min_order (the range of their orders), which sit at their floor and
+    which fall short."""
+    parts = []
+    for verdict, text in (("order >= min_order", "observed orders {lo} to {hi}"),
+                          ("at floor", "no discretization error (every error at most its floor)"),
+                          ("below min_order", "**below min_order**")):
+        rows = orders[orders["verdict"] == verdict]
+        if len(rows):
+            names = ", ".join(dict.fromkeys(rows["quantity"]))
+            lo, hi = fmt_number(rows["order"].min(), 3), fmt_number(rows["order"].max(), 3)
+            parts.append(f"{names}: {text.format(lo=lo, hi=hi)}")
+    return "; ".join(parts)
+
+
+def _orders_table(orders: pd.DataFrame) -> str:
+    """One row per solver and quantity: the errors from the coarsest step down, the orders, the verdict."""
+    cells = []
+    for (solver, quantity), rows in orders.groupby(["solver", "quantity"], sort=False):
+        rows = rows.sort_values("h", ascending=False)
+        cells.append([solver, quantity, ", ".join(fmt_number(e) for e in rows["max_abs_diff"]),
+                      ", ".join(fmt_number(o, 3) for o in rows["order"].iloc[1:]), rows["verdict"].iloc[0]])
+    return md_table(["solver", "quantity", "max abs(Exudyn − in-house), h to h/4", "orders", "verdict"], cells)
+
+
+def joint_friction(ctx: ReportContext, timing: pd.DataFrame | None) -> list[str]:
+    runs, orders = ctx.table("spatial_friction"), ctx.table("spatial_friction_orders")
+    if runs is None or runs.empty:
+        return []
+    if timing is not None:
+        runs = runs.merge(timing, on=["mechanism", "engine", "group", "setting"], how="left")
+    lines = ["### Friction in spatial joints", "",
+             "The carriage of `study/spatial/friction_carriage.py`: a carriage on an inclined prismatic guide "
+             "carrying a wheel on a revolute axle, Coulomb friction in both (the guide's normal force the 2-vector of "
+             "its two transverse rows, the axle's the transverse reaction; "
+             "`reference/spatial/friction_carriage.toml`).",
+             ""]
+    for _, r in runs[runs["law"] == "exact"].iterrows():
+        events = ", ".join(f"{j} at {fmt_number(float(t), 7)} s" for j, t in
+                           zip(str(r["stuck_joints"]).split(";"), str(r["stick_times"]).split(";")) if j)
+        lines += [f"The exact law in-house ({r['setting']}, {fmt_number(r['t_end'])} s) sticks {events}; its energy "
+                  f"balance with the friction's work closes to {fmt_number(r['energy_balance_error'])} J "
+                  f"({fmt_number(r['dissipated_J'])} J dissipated).", ""]
+    reference = runs[runs["group"] == "friction_reference"]
+    if orders is not None and len(orders) and len(reference):
+        ref = reference.iloc[0]
+        for solver, rows in orders.groupby("solver"):
+            lines += [f"The regularized law ({ref['law'].partition(' ')[2]}, Exudyn's only one, which never sticks: "
+                      f"the carriage slides back through the band) over {fmt_number(ref['t_end'])} s, Exudyn {solver} "
+                      f"at h = "
+                      f"{', '.join(fmt_number(h) for h in sorted(set(rows['h']), reverse=True))} s against the "
+                      f"in-house run ({ref['setting']}): {_orders_sentence(rows)}. min_order = "
+                      f"{fmt_number(tolerance('min_order', 'cross_validation'))} (cross_validation.toml); for the "
+                      f"energy balance the error is Exudyn's own balance error.", ""]
+    columns = {"engine": "engine", "setting": "setting", "law": "law", "t_end": "t_end [s]",
+               "energy_balance_error": "energy balance error [J]", "dissipated_J": "dissipated by friction [J]"}
+    if "cpu_s" in runs:
+        columns["cpu_s"] = "CPU [s]"
+    lines += [_run_table(runs, columns), ""]
+    if orders is not None and len(orders):
+        lines += [_orders_table(orders), ""]
+    return lines
+
+
 def equal_accuracy(ctx: ReportContext) -> list[str]:
     table = ctx.table("spatial_equal_accuracy_timing")
     if table is None or table.empty:
@@ -159,4 +226,4 @@ def section(ctx: ReportContext) -> list[str]:
               "in-house on the reference path and in Exudyn from the same description (`reference/cases/spatial."
               "toml`).", ""]
     return (lines + heavy_top(runs) + sliding_mode_energy(runs) + bricard(runs) + slider_crank(runs)
-            + equal_accuracy(ctx))
+            + joint_friction(ctx, ctx.table("spatial_timing")) + equal_accuracy(ctx))
