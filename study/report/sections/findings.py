@@ -136,12 +136,17 @@ def benchmarks(ctx: ReportContext) -> str:
     a02_in = a02[a02["engine"] == "inhouse"]["a02_verdict"]
     a02_ex = a02[a02["engine"] == "exudyn"]["a02_verdict"]
     agrees = "agrees" if bool(peer["agrees"].astype(bool).all()) else "disagrees"
+    bricard = ctx.table("exudyn_bricard_test_model_verdict")
+    peer_bricard = "" if bricard is None else (
+        f"; Exudyn's Bricard test model {'agrees' if bool(bricard['agrees'].astype(bool).all()) else 'disagrees'} "
+        f"with its published value ({bricard['inhouse_minus_published'].abs().max():.2g}, bound "
+        f"{bricard['bound'].max():.2g})")
     return (f"IFToMM A01 (2000 s): in-house runs {_counts(inhouse)}; IFToMM A02: "
             f"in-house {_counts(a02_in)}, Exudyn {_counts(a02_ex)}; Andrews' squeezer matches the Test Set's "
             f"published solution to {andrews['relative_difference'].abs().max():.2g} relative; Exudyn's "
             f"slider-crank test model {agrees} with its published value "
-            f"({peer['inhouse_minus_published_m'].abs().max():.2g} m, bound {peer['bound_m'].max():.2g} m) "
-            f"({link(BENCHMARKS)}).")
+            f"({peer['inhouse_minus_published_m'].abs().max():.2g} m, bound {peer['bound_m'].max():.2g} m)"
+            f"{peer_bricard} ({link(BENCHMARKS)}).")
 
 
 def errata(ctx: ReportContext) -> str:
@@ -162,7 +167,7 @@ QUESTIONS: tuple[tuple[str, Callable[[ReportContext], str]], ...] = (
     ("Does sliding mode beat Baumgarte at equal gains?", sliding_mode),
     ("In-house against Exudyn, at equal accuracy and CPU?", exudyn),
     ("Each benchmark by its own criterion?", benchmarks),
-    ("Spatial mechanisms: the heavy top, and sliding mode's energy?", spatial),
+    ("Spatial mechanisms: the heavy top, Bricard, joint friction, and sliding mode's energy?", spatial),
     ("What did the papers get wrong?", errata),
 )
 
