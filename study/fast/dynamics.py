@@ -60,34 +60,39 @@ class _WorkspaceType(types.StructRef):
     compiled code: study.kernels.linking)."""
 
 
-WORKSPACE = _WorkspaceType([
+#: the workspace's arrays, in the order of :func:`work_arrays` (the run's mode, p, lp, ci, cf follow them)
+WORK_FIELDS = [
     ("q", V1), ("qd", V1), ("M", V2), ("Q", V1), ("phi", V1), ("J", V2), ("gamma", V1), ("Jt", V2), ("bt", V1),
     ("powers", V1), ("c", V1), ("phidot", V1), ("K", V2), ("piv", I1), ("x", V1), ("qdd", V1), ("lam", V1),
     ("U", V2), ("L", V2), ("A", V2), ("pivA", I1), ("active", I1), ("scratch", V2), ("normal", V1), ("f", V1),
-    ("vt", V1), ("stick", B1), ("s", V1), ("pin", V1), ("at", V1), ("counters", I1),
-    ("mode", I1), ("p", V1), ("lp", V1), ("ci", I1), ("cf", V1)])
+    ("vt", V1), ("stick", B1), ("s", V1), ("pin", V1), ("at", V1), ("counters", I1)]
+WORKSPACE = _WorkspaceType(WORK_FIELDS + [("mode", I1), ("p", V1), ("lp", V1), ("ci", I1), ("cf", V1)])
+WORK_T = types.Tuple([t for _, t in WORK_FIELDS])   # the entry kernels' argument ``work``
+
+
+def work_arrays(ci: np.ndarray) -> tuple:
+    """Every array one evaluation needs (nc contacts and npin pins: nt rows of Jt), zeroed, in the order of
+    ``WORK_FIELDS``: allocated by NumPy, so the compiled code has no allocation of its own to compile (np.zeros'
+    four specializations were ~0.7 s CPU of a cold run). ``at``: the time of the last failing evaluation; counters:
+    [evaluations, its status]."""
+    m, r, nc, nw, npin = (int(v) for v in dimensions.py_func(ci))
+    n, nt = m + r, nc + npin
+    z = np.zeros
+    return (z(m), z(m), z((m, m)), z(m), z(r), z((r, m)), z(r), z((nt, m)), z(nt), z(nw), z(r), z(r), z((n, n)),
+            z(n, np.int64), z(n), z(m), z(r), z((m, nt)), z((r, nt)), z((nt, nt)), z(nt, np.int64), z(nt, np.int64),
+            z((SCRATCH_ROWS, nt)), z(nt), z(nt), z(nt), z(nt, np.bool_), z(nt), z(npin * (PIN_MATRICES + r + npin)),
+            z(1), z(2, np.int64))
 
 
 @internal()
-def workspace(mode, p, lp, ci, cf):
-    """Every array one evaluation needs, allocated once per integration (nc contacts and npin pins: nt rows of Jt),
-    with the run's mode, parameters and options (read, never written: one pointer instead of five arrays in every
-    call). ``at``: the time of the last failing evaluation; counters: [evaluations, its status]."""
-    m, r, nc, nw, npin = dimensions(ci)
-    n, nt = m + r, nc + npin
+def workspace(work, mode, p, lp, ci, cf):
+    """The workspace of one integration: the arrays ``work`` (:func:`work_arrays`) with the run's mode, parameters
+    and options (read, never written: one pointer instead of five arrays in every call)."""
     ws = structref.new(WORKSPACE)
+    (ws.q, ws.qd, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers, ws.c, ws.phidot, ws.K, ws.piv, ws.x,
+     ws.qdd, ws.lam, ws.U, ws.L, ws.A, ws.pivA, ws.active, ws.scratch, ws.normal, ws.f, ws.vt, ws.stick, ws.s, ws.pin,
+     ws.at, ws.counters) = work
     ws.mode, ws.p, ws.lp, ws.ci, ws.cf = mode, p, lp, ci, cf
-    ws.q, ws.qd, ws.M, ws.Q = np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m)
-    ws.phi, ws.J, ws.gamma = np.zeros(r), np.zeros((r, m)), np.zeros(r)
-    ws.Jt, ws.bt, ws.powers = np.zeros((nt, m)), np.zeros(nt), np.zeros(nw)
-    ws.c, ws.phidot, ws.K, ws.piv = np.zeros(r), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64)
-    ws.x, ws.qdd, ws.lam = np.zeros(n), np.zeros(m), np.zeros(r)
-    ws.U, ws.L, ws.A = np.zeros((m, nt)), np.zeros((r, nt)), np.zeros((nt, nt))
-    ws.pivA, ws.active, ws.scratch = np.zeros(nt, np.int64), np.zeros(nt, np.int64), np.zeros((SCRATCH_ROWS, nt))
-    ws.normal, ws.f, ws.vt, ws.s = np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt)
-    ws.stick = np.zeros(nt, np.bool_)
-    ws.pin, ws.at = np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1)
-    ws.counters = np.zeros(2, np.int64)
     return ws
 
 
@@ -283,16 +288,17 @@ def rhs(evaluate, bias, phases, t, y, ws, dy):
 
 
 #: the entry kernels' declared signatures: each compiles (or loads) for it on first use (study.fast.frontend.entry)
-ACCELERATIONS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64)
-RHS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1)
+ACCELERATIONS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64,
+                                  WORK_T)
+RHS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1, WORK_T)
 
 
 @kernel()
-def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat):
+def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat, work):
     """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f] (N and f: contacts, then pins:
-    |R| and the torque). For tests and timing."""
+    |R| and the torque); ``work``: :func:`work_arrays`. For tests and timing."""
     m, r, nc, nw, npin = dimensions(ci)
-    ws = workspace(mode, p, lp, ci, cf)
+    ws = workspace(work, mode, p, lp, ci, cf)
     nt = nc + npin
     status = 0
     for _ in range(repeat):
@@ -312,6 +318,7 @@ def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, o
 
 
 @kernel()
-def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy):
-    """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators; returns a status code."""
-    return rhs(evaluate, bias, phases, t, y, workspace(mode, p, lp, ci, cf), dy)
+def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy, work):
+    """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators, ``work`` the zeroed arrays of
+    :func:`work_arrays`; returns a status code."""
+    return rhs(evaluate, bias, phases, t, y, workspace(work, mode, p, lp, ci, cf), dy)

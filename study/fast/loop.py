@@ -22,7 +22,7 @@ from numba import types
 from numba.experimental import structref
 
 from study.kernels.cache import internal, kernel
-from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, WORKSPACE,
+from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, WORK_T, WORKSPACE,
                                  accelerations, dimensions, note_failure, pin_block, rhs, workspace)
 from study.fast.project import project
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
@@ -38,9 +38,10 @@ SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)
 
 I2 = types.Array(i8, 2, "C")
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
+STEP_T = types.Tuple((V2, V2, V1, V1, V1, V1, V1, V1))   # segment_arrays
 SEGMENT = types.Tuple((i8, f8, i8))(
     EVALUATE_T, BIAS_T, PHASES_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1,
-    V1, I1, V1, V1, V2, I2, I1, V1, V1)
+    V1, I1, V1, V1, V2, I2, I1, V1, V1, WORK_T, STEP_T)
 
 
 def segment_signature(friction: bool, projects: bool):
@@ -68,20 +69,34 @@ STATE = _StateType([
 
 
 @internal()
-def integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, n_events, t_out, y_out, mode_out, counters,
+def event_count(ci, nc, npin):
+    """The run's switching functions: its loads', then, with switched friction, 2 per contact and per pin (nc, npin:
+    study.fast.dynamics.dimensions; Python calls its ``py_func``)."""
+    return ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
+
+
+def segment_arrays(method: int, tab: tuple, n_stages: int, n_rows: int, n: int, ci: np.ndarray) -> tuple:
+    """A segment's own arrays, zeroed, allocated by NumPy (see ``study.fast.dynamics.work_arrays``): the stages K (DOP853:
+    its 16 extended stages), the interpolant's coefficients D, the step's y_new, f, f_new, a scratch state tmp, and
+    the switching functions g_new (at the step's end) and g_tmp (where located)."""
+    n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1
+    nc, npin = dimensions.py_func(ci)[2::2]
+    n_g = max(int(event_count.py_func(ci, nc, npin)), 1)
+    return (np.zeros((max(n_k, 4), n)), np.zeros((max(n_rows, 4), n)), np.zeros(n), np.zeros(n), np.zeros(n),
+            np.zeros(n), np.zeros(n_g), np.zeros(n_g))
+
+
+@internal()
+def integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, steps, t_out, y_out, mode_out, counters,
                       y_end, bounds):
     """Everything a segment's helpers share, behind one pointer (each array argument costs a call ~7 LLVM arguments):
     the evaluation workspace ``ws``, the method's numbers and tableau (A, B, C, E, E3, E5, P or D: ``ta``..``tp``),
-    the stages K, the interpolant's coefficients D, the step's y, y_new, f, f_new, a scratch state tmp, the switching
-    functions g_new (at the step's end) and g_tmp (located), and the caller's arrays (integrate_segment)."""
-    n = y0.size
-    n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
+    the step's y (from y0), the arrays ``steps`` (:func:`segment_arrays`) and the caller's (integrate_segment)."""
     st = structref.new(STATE)
     st.ws, st.method, st.n_stages, st.n_rows, st.rtol, st.atol = ws, method, n_stages, n_rows, rtol, atol
     st.ta, st.tb, st.tc, st.te, st.te3, st.te5, st.tp = tab
-    st.K, st.D = np.zeros((max(n_k, 4), n)), np.zeros((max(n_rows, 4), n))
-    st.y, st.y_new, st.f, st.f_new, st.tmp = y0.copy(), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    st.g_new, st.g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
+    st.y = y0.copy()
+    st.K, st.D, st.y_new, st.f, st.f_new, st.tmp, st.g_new, st.g_tmp = steps
     st.t_out, st.y_out, st.mode_out, st.counters, st.y_end, st.bounds = t_out, y_out, mode_out, counters, y_end, bounds
     return st
 
@@ -97,7 +112,7 @@ def event_values(evaluate, bias, phases, indicators, t, y, ws, out):
         ws.qd[i] = y[m + i]
     if nlm > 0:
         indicators(t, ws.q, ws.qd, ws.p, ws.lp, out[:nlm])
-    if ci[CI_SWITCHED] == 0:
+    if phases is None or ci[CI_SWITCHED] == 0:   # None: the loop compiled for runs without friction, none switched
         return 0
     status = accelerations(evaluate, bias, phases, t, ws)
     if status != 0:
@@ -334,7 +349,8 @@ def _finish(kinematics, t, st):
 
 @kernel()   # compiled (or loaded) for SEGMENT on first use (study.fast.frontend.entry)
 def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0,
-                      t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
+                      t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds,
+                      work, steps):
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
 
     counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0), accepted steps in a row
@@ -343,12 +359,13 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
     FAIL_EVALUATIONS once the evaluations of the whole run reach max_evaluations, and with FAIL_STALL after
     min_step_run accepted adaptive steps in a row shorter than min_step.
     Returns (outcome, t reached, index of the switching function that crossed or -1); the state
-    reached is written to y_end (FAIL_RHS: the time and the q, qd of the failing evaluation).
+    reached is written to y_end (FAIL_RHS: the time and the q, qd of the failing evaluation). work and steps: the
+    zeroed arrays of ``study.fast.dynamics.work_arrays`` and :func:`segment_arrays`, fresh for each segment.
     """
+    ws = workspace(work, mode, p, lp, ci, cf)
     m, r, nc, nw, npin = dimensions(ci)
-    ws = workspace(mode, p, lp, ci, cf)
-    n_events = ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
-    st = integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, n_events, t_out, y_out, mode_out,
+    n_events = event_count(ci, nc, npin)
+    st = integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, steps, t_out, y_out, mode_out,
                            counters, y_end, bounds)
     y, y_new, f, f_new = st.y, st.y_new, st.f, st.f_new
     n = y.size
