@@ -12,7 +12,9 @@ restart of ``study.solver.integrate.integrate``:
 3. the requested output times inside the step are sampled from the interpolant.
 
 Only the samples are stored (``y_out``, preallocated by the caller): memory is bounded by the
-requested output, not by the number of steps.
+requested output, not by the number of steps. Every array the segment works in is allocated by NumPy in the caller
+(:func:`segment_arrays`, ``study.fast.dynamics.work_arrays``) and reached by the helpers through one structref, the
+integration state (:func:`integration_state`), so no allocation is compiled and no call passes a list of arrays.
 """
 
 from __future__ import annotations

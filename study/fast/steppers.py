@@ -8,6 +8,9 @@ up to round-off. RK4 is ``study.solver.integrate.RK4`` (cubic Hermite dense outp
 
 Dense output is built only for steps that need it (an output time or a switch inside the step),
 unlike the reference loop, which builds it for every step (3 extra evaluations per DOP853 step).
+
+The steps work on the segment's integration state ``st`` (``study.fast.loop.integration_state``: the tableau, the
+stages K, the interpolant D, the step's y, y_new, f, f_new and the evaluation workspace), one pointer per call.
 """
 
 from __future__ import annotations
