@@ -60,30 +60,39 @@ class _WorkspaceType(types.StructRef):
     compiled code: study.kernels.linking)."""
 
 
-WORKSPACE = _WorkspaceType([
+#: the workspace's arrays, in the order of :func:`work_arrays` (the run's mode, p, lp, ci, cf follow them)
+WORK_FIELDS = [
     ("q", V1), ("qd", V1), ("M", V2), ("Q", V1), ("phi", V1), ("J", V2), ("gamma", V1), ("Jt", V2), ("bt", V1),
     ("powers", V1), ("c", V1), ("phidot", V1), ("K", V2), ("piv", I1), ("x", V1), ("qdd", V1), ("lam", V1),
     ("U", V2), ("L", V2), ("A", V2), ("pivA", I1), ("active", I1), ("scratch", V2), ("normal", V1), ("f", V1),
-    ("vt", V1), ("stick", B1), ("s", V1), ("pin", V1), ("at", V1), ("counters", I1)])
+    ("vt", V1), ("stick", B1), ("s", V1), ("pin", V1), ("at", V1), ("counters", I1)]
+WORKSPACE = _WorkspaceType(WORK_FIELDS + [("mode", I1), ("p", V1), ("lp", V1), ("ci", I1), ("cf", V1)])
+WORK_T = types.Tuple([t for _, t in WORK_FIELDS])   # the entry kernels' argument ``work``
+
+
+def work_arrays(ci: np.ndarray) -> tuple:
+    """Every array one evaluation needs (nc contacts and npin pins: nt rows of Jt), zeroed, in the order of
+    ``WORK_FIELDS``: allocated by NumPy, so the compiled code has no allocation of its own to compile (np.zeros'
+    four specializations were ~0.7 s CPU of a cold run). ``at``: the time of the last failing evaluation; counters:
+    [evaluations, its status]."""
+    m, r, nc, nw, npin = (int(v) for v in dimensions.py_func(ci))
+    n, nt = m + r, nc + npin
+    z = np.zeros
+    return (z(m), z(m), z((m, m)), z(m), z(r), z((r, m)), z(r), z((nt, m)), z(nt), z(nw), z(r), z(r), z((n, n)),
+            z(n, np.int64), z(n), z(m), z(r), z((m, nt)), z((r, nt)), z((nt, nt)), z(nt, np.int64), z(nt, np.int64),
+            z((SCRATCH_ROWS, nt)), z(nt), z(nt), z(nt), z(nt, np.bool_), z(nt), z(npin * (PIN_MATRICES + r + npin)),
+            z(1), z(2, np.int64))
 
 
 @internal()
-def workspace(m, r, nc, nw, npin):
-    """Every array one evaluation needs, allocated once per integration (nc contacts and npin pins: nt rows of Jt).
-    ``at``: the time of the last failing evaluation; counters: [evaluations, its status]."""
-    n, nt = m + r, nc + npin
+def workspace(work, mode, p, lp, ci, cf):
+    """The workspace of one integration: the arrays ``work`` (:func:`work_arrays`) with the run's mode, parameters
+    and options (read, never written: one pointer instead of five arrays in every call)."""
     ws = structref.new(WORKSPACE)
-    ws.q, ws.qd, ws.M, ws.Q = np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(m)
-    ws.phi, ws.J, ws.gamma = np.zeros(r), np.zeros((r, m)), np.zeros(r)
-    ws.Jt, ws.bt, ws.powers = np.zeros((nt, m)), np.zeros(nt), np.zeros(nw)
-    ws.c, ws.phidot, ws.K, ws.piv = np.zeros(r), np.zeros(r), np.zeros((n, n)), np.zeros(n, np.int64)
-    ws.x, ws.qdd, ws.lam = np.zeros(n), np.zeros(m), np.zeros(r)
-    ws.U, ws.L, ws.A = np.zeros((m, nt)), np.zeros((r, nt)), np.zeros((nt, nt))
-    ws.pivA, ws.active, ws.scratch = np.zeros(nt, np.int64), np.zeros(nt, np.int64), np.zeros((SCRATCH_ROWS, nt))
-    ws.normal, ws.f, ws.vt, ws.s = np.zeros(nt), np.zeros(nt), np.zeros(nt), np.zeros(nt)
-    ws.stick = np.zeros(nt, np.bool_)
-    ws.pin, ws.at = np.zeros(npin * (PIN_MATRICES + r + npin)), np.zeros(1)
-    ws.counters = np.zeros(2, np.int64)
+    (ws.q, ws.qd, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers, ws.c, ws.phidot, ws.K, ws.piv, ws.x,
+     ws.qdd, ws.lam, ws.U, ws.L, ws.A, ws.pivA, ws.active, ws.scratch, ws.normal, ws.f, ws.vt, ws.stick, ws.s, ws.pin,
+     ws.at, ws.counters) = work
+    ws.mode, ws.p, ws.lp, ws.ci, ws.cf = mode, p, lp, ci, cf
     return ws
 
 
@@ -101,7 +110,7 @@ def pin_block(nc):
 
 
 @internal()
-def constraint_rhs(bias, ci, cf, ws):
+def constraint_rhs(bias, ws):
     """ws.c = gamma + b(Phi, Phidot) of the stabilization method: its compiled counterpart ``bias``
     (``compiled_bias`` of its class in study.solver.stabilization), parameters at cf[ci[CI_BIAS]:]."""
     r, m = ws.J.shape
@@ -110,7 +119,7 @@ def constraint_rhs(bias, ci, cf, ws):
         for j in range(m):
             phidot += ws.J[i, j] * ws.qd[j]
         ws.phidot[i] = phidot
-    bias(ws.phi, ws.phidot, cf, ci[CI_BIAS], ws.c)
+    bias(ws.phi, ws.phidot, ws.cf, ws.ci[CI_BIAS], ws.c)
     for i in range(r):
         ws.c[i] = ws.gamma[i] + ws.c[i]
 
@@ -121,7 +130,7 @@ def no_phases(mode, nlm, vt, cf, off, stick, s):
 
 
 @internal()
-def _friction(ci, cf, ws, m, r, nc):
+def _friction(ws, m, r, nc):
     """The coupled normal-force / friction problem (``study.laws.contact.contact_forces``) on top of the solution
     without tangential forces in ws.qdd, ws.lam. The rows of Jt with a tangential force are the stuck ones and the
     sliding ones with s != 0; sliding rows are contacts (j < nc), a stuck row may be a pin's."""
@@ -137,6 +146,7 @@ def _friction(ci, cf, ws, m, r, nc):
             ws.U[i, col] = ws.x[i]
         for i in range(r):
             ws.L[i, col] = ws.x[m + i]
+    ci, cf = ws.ci, ws.cf
     mu_k, resistance = cf[CF_HEADER:CF_HEADER + nc], cf[CF_HEADER + 2 * nc:CF_HEADER + 3 * nc]
     return contact_forces(ws.active, n_act, ws.stick, ws.s, ws.Jt, ws.bt, ws.qdd, ws.lam, ws.U, ws.L,
                           ci[CI_CONTACT0:CI_CONTACT0 + nc], mu_k, resistance, ws.A, ws.pivA, ws.scratch, ws.f,
@@ -144,7 +154,7 @@ def _friction(ci, cf, ws, m, r, nc):
 
 
 @internal()
-def _pins(ci, cf, ws, m, r, nc, npin):
+def _pins(ws, m, r, nc, npin):
     """The pins' torques (FrictionDynamics._solve_pins): Newton (``study.laws.contact.pin_newton_step``) from
     tau = 0 (ws.qdd, ws.lam hold that solution), the contacts' solve repeated at every iterate. s = 0 for a stuck
     pin, whose torque is its stuck row's multiplier. Leaves f and normal (|R|) of the pins; PIN_NOT_CONVERGED after
@@ -152,6 +162,7 @@ def _pins(ci, cf, ws, m, r, nc, npin):
     slip, tau = ws.pin[PIN_SLIP * npin:(PIN_SLIP + 1) * npin], ws.pin[PIN_TAU * npin:(PIN_TAU + 1) * npin]
     res, norm = ws.pin[PIN_RESIDUAL * npin:(PIN_RESIDUAL + 1) * npin], ws.pin[PIN_NORM * npin:(PIN_NORM + 1) * npin]
     step = ws.pin[PIN_STEP * npin:(PIN_STEP + 1) * npin]
+    ci, cf = ws.ci, ws.cf
     o = PIN_MATRICES * npin
     Lp = ws.pin[o:o + npin * r].reshape((npin, r))
     jac = ws.pin[o + npin * r:o + npin * (r + npin)].reshape((npin, npin))
@@ -184,7 +195,7 @@ def _pins(ci, cf, ws, m, r, nc, npin):
                 ws.qdd[i] = ws.x[i]
             for k in range(r):
                 ws.lam[k] = ws.x[m + k]
-        status = _friction(ci, cf, ws, m, r, nc)
+        status = _friction(ws, m, r, nc)
         if status != OK:
             return status
         outcome = pin_newton_step(ws.lam, rows, Lp, tau, slip, cf[po + npin:po + 2 * npin],
@@ -201,12 +212,12 @@ def _pins(ci, cf, ws, m, r, nc, npin):
 
 
 @internal()
-def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
+def accelerations(evaluate, bias, phases, t, ws):
     """qdd, lambda (and with friction f, v_t, N) at the state in ws.q, ws.qd; returns a status code."""
-    evaluate(t, ws.q, ws.qd, mode, p, lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
+    evaluate(t, ws.q, ws.qd, ws.mode, ws.p, ws.lp, ws.M, ws.Q, ws.phi, ws.J, ws.gamma, ws.Jt, ws.bt, ws.powers)
     ws.counters[0] += 1
     m, r = ws.q.size, ws.phi.size
-    constraint_rhs(bias, ci, cf, ws)
+    constraint_rhs(bias, ws)
     K = ws.K
     for i in range(m):
         for j in range(m):
@@ -230,6 +241,7 @@ def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
         ws.lam[k] = ws.x[m + k]
     if phases is None:   # the loop compiled for runs without friction (study.fast.frontend.entry): no friction code
         return OK
+    ci = ws.ci
     if ci[CI_FRICTION] == 0:
         return OK
     nt = ws.Jt.shape[0]
@@ -238,11 +250,11 @@ def accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws):
         for i in range(m):
             v += ws.Jt[j, i] * ws.qd[i]
         ws.vt[j] = v
-    phases(mode, ci[CI_NLOADMODE], ws.vt, cf, ci[CI_PHASES], ws.stick, ws.s)
+    phases(ws.mode, ci[CI_NLOADMODE], ws.vt, ws.cf, ci[CI_PHASES], ws.stick, ws.s)
     npin = dimensions(ci)[4]
     if npin > 0:
-        return _pins(ci, cf, ws, m, r, nt - npin, npin)
-    return _friction(ci, cf, ws, m, r, nt)
+        return _pins(ws, m, r, nt - npin, npin)
+    return _friction(ws, m, r, nt)
 
 
 @internal()
@@ -254,13 +266,13 @@ def note_failure(ws, status, t):
 
 
 @internal()
-def rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, dy):
+def rhs(evaluate, bias, phases, t, y, ws, dy):
     """dy = [qd, qdd, load powers, friction powers f_j v_t,j of the contacts, then the pins]; returns a status code."""
     m = ws.q.size
     for i in range(m):
         ws.q[i] = y[i]
         ws.qd[i] = y[m + i]
-    status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
+    status = accelerations(evaluate, bias, phases, t, ws)
     if status != OK:
         note_failure(ws, status, t)
     for i in range(m):
@@ -269,30 +281,31 @@ def rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, dy):
     nw = ws.powers.size
     for k in range(nw):
         dy[2 * m + k] = ws.powers[k]
-    if ci[CI_FRICTION] == 1:
+    if ws.ci[CI_FRICTION] == 1:
         for j in range(ws.Jt.shape[0]):
             dy[2 * m + nw + j] = ws.f[j] * ws.vt[j]
     return status
 
 
 #: the entry kernels' declared signatures: each compiles (or loads) for it on first use (study.fast.frontend.entry)
-ACCELERATIONS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64)
-RHS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1)
+ACCELERATIONS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, V1, I1, V1, V1, I1, V1, V1, types.int64,
+                                  WORK_T)
+RHS_ENTRY = types.int64(EVALUATE_T, BIAS_T, PHASES_T, f8, V1, I1, V1, V1, I1, V1, V1, WORK_T)
 
 
 @kernel()
-def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat):
+def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, out, repeat, work):
     """``repeat`` acceleration evaluations at (t, q, qd); out = [qdd, lambda, N, f] (N and f: contacts, then pins:
-    |R| and the torque). For tests and timing."""
+    |R| and the torque); ``work``: :func:`work_arrays`. For tests and timing."""
     m, r, nc, nw, npin = dimensions(ci)
-    ws = workspace(m, r, nc, nw, npin)
+    ws = workspace(work, mode, p, lp, ci, cf)
     nt = nc + npin
     status = 0
     for _ in range(repeat):
         for i in range(m):
             ws.q[i] = q[i]
             ws.qd[i] = qd[i]
-        status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
+        status = accelerations(evaluate, bias, phases, t, ws)
     for i in range(m):
         out[i] = ws.qdd[i]
     for k in range(r):
@@ -305,7 +318,7 @@ def accelerations_entry(evaluate, bias, phases, t, q, qd, mode, p, lp, ci, cf, o
 
 
 @kernel()
-def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy):
-    """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators; returns a status code."""
-    m, r, nc, nw, npin = dimensions(ci)
-    return rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, workspace(m, r, nc, nw, npin), dy)
+def rhs_entry(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, dy, work):
+    """:func:`rhs` called from Python: dy = y' at (t, y), for scipy's integrators, ``work`` the zeroed arrays of
+    :func:`work_arrays`; returns a status code."""
+    return rhs(evaluate, bias, phases, t, y, workspace(work, mode, p, lp, ci, cf), dy)

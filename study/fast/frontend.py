@@ -29,9 +29,9 @@ from study.kernels.cache import check, compile_lock
 from study.fast.codegen import generated_module
 
 from study.fast.dynamics import (ACCELERATIONS_ENTRY, CI_PROJECTS, PIN_NOT_CONVERGED, RHS_ENTRY, accelerations_entry,
-                                 no_phases, rhs_entry)
+                                 no_phases, rhs_entry, work_arrays)
 from study.fast.loop import (DONE, FAIL_EVALUATIONS, FAIL_LOCATE, FAIL_NONFINITE, FAIL_PROJECTION, FAIL_RHS, FAIL_STALL,
-                             FAIL_STEP, integrate_segment, segment_signature)
+                             FAIL_STEP, integrate_segment, segment_arrays, segment_signature)
 from study.kernels.signatures import BIAS, EVALUATE, INDICATORS, KINEMATICS, PHASES
 from study.laws.modes import as_mode, initial_mode, switch
 from study.fast.steppers import tableau
@@ -250,7 +250,8 @@ def compiled_rhs(eom: EquationsOfMotion, mechanism, dyn: Dynamics):
         dyn.nfev += 1
         dy = np.empty(y.size)
         status = rhs_kernel(evaluate, bias, phases, float(t), np.ascontiguousarray(y, dtype=float),
-                           no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy)
+                           no_mode if mode is None else np.asarray(mode, dtype=np.int64), p, lp, ci, cf, dy,
+                           work_arrays(ci))
         if status != 0:
             dyn.rhs(t, y, mode)
             raise RuntimeError(f"compiled acceleration solve failed at t = {t:.9g} s ({_FAILURES[FAIL_RHS]}) "
@@ -269,7 +270,8 @@ def accelerations(s: Setup, t: float, q, qd, mode=(), repeat: int = 1) -> np.nda
     out = np.zeros(m + r + 2 * nt)
     status = entry(accelerations_entry, ACCELERATIONS_ENTRY)(s.model.module.evaluate, s.bias, s.phases, float(t),
                                  np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
-                                 np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat))
+                                 np.asarray(mode, dtype=np.int64), s.model.p, s.model.lp, s.ci, s.cf, out, int(repeat),
+                                 work_arrays(s.ci))
     if status == PIN_NOT_CONVERGED:
         _pin_failure(s.dyn, t, q, qd, mode)
     if status != 0:
@@ -374,7 +376,8 @@ def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float,
             model.module.evaluate, s.bias, phases, model.module.indicators, kinematics,
             METHOD_IDS[integrator], arrays, n_stages, order, n_rows, t, y, float(t_end), first, float(rtol), float(atol),
             np.asarray(mode if n_mode else (0,), dtype=np.int64)[:n_mode], model.p, model.lp, s.ci, t_out, s.cf,
-            y_out, mode_out, counters, y_end, bounds)
+            y_out, mode_out, counters, y_end, bounds, work_arrays(s.ci),
+            segment_arrays(METHOD_IDS[integrator], arrays, n_stages, n_rows, len(s.y0), s.ci))
         restarts += 1
         if outcome < 0:
             _raise_failure(outcome, integrator, t_reached, i_event, counters, y_end, mode, s, max_evaluations, min_step)

@@ -12,17 +12,20 @@ restart of ``study.solver.integrate.integrate``:
 3. the requested output times inside the step are sampled from the interpolant.
 
 Only the samples are stored (``y_out``, preallocated by the caller): memory is bounded by the
-requested output, not by the number of steps.
+requested output, not by the number of steps. Every array the segment works in is allocated by NumPy in the caller
+(:func:`segment_arrays`, ``study.fast.dynamics.work_arrays``) and reached by the helpers through one structref, the
+integration state (:func:`integration_state`), so no allocation is compiled and no call passes a list of arrays.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import types
+from numba.experimental import structref
 
 from study.kernels.cache import internal, kernel
-from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, accelerations,
-                                 dimensions, note_failure, pin_block, rhs, workspace)
+from study.fast.dynamics import (CF_HEADER, CI_NLOADMODE, CI_PROJECTS, CI_SWITCHED, PIN_NORM, WORK_T, WORKSPACE,
+                                 accelerations, dimensions, note_failure, pin_block, rhs, workspace)
 from study.fast.project import project
 from study.kernels.signatures import BIAS_T, EVALUATE_T, I1, INDICATORS_T, KINEMATICS_T, PHASES_T, V1, V2, f8, i8
 from study.fast.steppers import (DOP853_ID, MAX_FACTOR, MIN_FACTOR, RK4_ID, SAFETY, combine, dense_eval,
@@ -35,10 +38,12 @@ DONE, EVENT = 0, 1
 FAIL_STEP, FAIL_RHS, FAIL_PROJECTION, FAIL_EVALUATIONS, FAIL_STALL, FAIL_NONFINITE, FAIL_LOCATE = -1, -2, -3, -4, -5, -6, -7
 SAMPLE_ATOL = 1e-12  # np.isclose(t_out, t_hi, rtol=0, atol=1e-12 max(1, |t_hi|)) in the reference
 
+I2 = types.Array(i8, 2, "C")
 TABLEAU_T = types.Tuple((V2, V1, V1, V1, V1, V1, V2))
+STEP_T = types.Tuple((V2, V2, V1, V1, V1, V1, V1, V1))   # segment_arrays
 SEGMENT = types.Tuple((i8, f8, i8))(
     EVALUATE_T, BIAS_T, PHASES_T, INDICATORS_T, KINEMATICS_T, i8, TABLEAU_T, i8, i8, i8, f8, V1, f8, f8, f8, f8, I1, V1,
-    V1, I1, V1, V1, V2, types.Array(i8, 2, "C"), I1, V1, V1)
+    V1, I1, V1, V1, V2, I2, I1, V1, V1, WORK_T, STEP_T)
 
 
 def segment_signature(friction: bool, projects: bool):
@@ -53,19 +58,65 @@ def segment_signature(friction: bool, projects: bool):
     return SEGMENT.return_type(*args)
 
 
+@structref.register
+class _StateType(types.StructRef):
+    """The numba type of a segment's integration state (see :func:`integration_state`)."""
+
+
+STATE = _StateType([
+    ("ws", WORKSPACE), ("method", i8), ("n_stages", i8), ("n_rows", i8), ("rtol", f8), ("atol", f8),
+    ("ta", V2), ("tb", V1), ("tc", V1), ("te", V1), ("te3", V1), ("te5", V1), ("tp", V2),
+    ("K", V2), ("D", V2), ("y", V1), ("y_new", V1), ("f", V1), ("f_new", V1), ("tmp", V1), ("g_new", V1),
+    ("g_tmp", V1), ("t_out", V1), ("y_out", V2), ("mode_out", I2), ("counters", I1), ("y_end", V1), ("bounds", V1)])
+
+
 @internal()
-def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, ws, out):
+def event_count(ci, nc, npin):
+    """The run's switching functions: its loads', then, with switched friction, 2 per contact and per pin (nc, npin:
+    study.fast.dynamics.dimensions; Python calls its ``py_func``)."""
+    return ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
+
+
+def segment_arrays(method: int, tab: tuple, n_stages: int, n_rows: int, n: int, ci: np.ndarray) -> tuple:
+    """A segment's own arrays, zeroed, allocated by NumPy (see ``study.fast.dynamics.work_arrays``): the stages K (DOP853:
+    its 16 extended stages), the interpolant's coefficients D, the step's y_new, f, f_new, a scratch state tmp, and
+    the switching functions g_new (at the step's end) and g_tmp (where located)."""
+    n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1
+    nc, npin = dimensions.py_func(ci)[2::2]
+    n_g = max(int(event_count.py_func(ci, nc, npin)), 1)
+    return (np.zeros((max(n_k, 4), n)), np.zeros((max(n_rows, 4), n)), np.zeros(n), np.zeros(n), np.zeros(n),
+            np.zeros(n), np.zeros(n_g), np.zeros(n_g))
+
+
+@internal()
+def integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, steps, t_out, y_out, mode_out, counters,
+                      y_end, bounds):
+    """Everything a segment's helpers share, behind one pointer (each array argument costs a call ~7 LLVM arguments):
+    the evaluation workspace ``ws``, the method's numbers and tableau (A, B, C, E, E3, E5, P or D: ``ta``..``tp``),
+    the step's y (from y0), the arrays ``steps`` (:func:`segment_arrays`) and the caller's (integrate_segment)."""
+    st = structref.new(STATE)
+    st.ws, st.method, st.n_stages, st.n_rows, st.rtol, st.atol = ws, method, n_stages, n_rows, rtol, atol
+    st.ta, st.tb, st.tc, st.te, st.te3, st.te5, st.tp = tab
+    st.y = y0.copy()
+    st.K, st.D, st.y_new, st.f, st.f_new, st.tmp, st.g_new, st.g_tmp = steps
+    st.t_out, st.y_out, st.mode_out, st.counters, st.y_end, st.bounds = t_out, y_out, mode_out, counters, y_end, bounds
+    return st
+
+
+@internal()
+def event_values(evaluate, bias, phases, indicators, t, y, ws, out):
     """Switching functions whose signs equal the mode while it holds (loads, then 2 per contact, then 2 per pin: the
     law ``study.laws.friction.switching_pair``)."""
+    ci, cf, mode = ws.ci, ws.cf, ws.mode
     m, nlm = ws.q.size, ci[CI_NLOADMODE]
     for i in range(m):
         ws.q[i] = y[i]
         ws.qd[i] = y[m + i]
     if nlm > 0:
-        indicators(t, ws.q, ws.qd, p, lp, out[:nlm])
-    if ci[CI_SWITCHED] == 0:
+        indicators(t, ws.q, ws.qd, ws.p, ws.lp, out[:nlm])
+    if phases is None or ci[CI_SWITCHED] == 0:   # None: the loop compiled for runs without friction, none switched
         return 0
-    status = accelerations(evaluate, bias, phases, t, mode, p, lp, ci, cf, ws)
+    status = accelerations(evaluate, bias, phases, t, ws)
     if status != 0:
         note_failure(ws, status, t)
     npin = dimensions(ci)[4]
@@ -83,42 +134,45 @@ def event_values(evaluate, bias, phases, indicators, t, y, mode, p, lp, ci, cf, 
 
 
 @internal()
-def _g(s, i, evaluate, bias, phases, indicators, method, D, n_rows, t_old, h, y_old, mode, p, lp, ci, cf, ws, ytmp, g):
+def _g(s, i, evaluate, bias, phases, indicators, t_old, h, st):
     """Switching function i at time s on the step's interpolant: the function of t that ``first_crossing`` locates."""
-    dense_eval(method, D, n_rows, y_old, (s - t_old) / h, ytmp)
-    event_values(evaluate, bias, phases, indicators, s, ytmp, mode, p, lp, ci, cf, ws, g)
-    return g[i]
+    dense_eval((s - t_old) / h, st, st.tmp)
+    event_values(evaluate, bias, phases, indicators, s, st.tmp, st.ws, st.g_tmp)
+    return st.g_tmp[i]
 
 
 first_crossing = internal()(crossing_finder(_g))   # the law of study.laws.events for _g
 
 
 @internal()
-def _store(kinematics, t, y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters):
+def _store(kinematics, y, st, m, r):
+    """y (projected if the run projects) and the mode as the next sample."""
+    counters, y_out, mode = st.counters, st.y_out, st.ws.mode
     k = counters[0]
     for i in range(y.size):
         y_out[k, i] = y[i]
-    if ci[CI_PROJECTS] == 1:
+    if st.ws.ci[CI_PROJECTS] == 1:
         yk = y.copy()
-        changed, status = project(kinematics, yk, p, ci, cf, m, r)
+        changed, status = project(kinematics, yk, st.ws, m, r)
         if status != 0:
             return status
         for i in range(y.size):
             y_out[k, i] = yk[i]
     for i in range(mode.size):
-        mode_out[k, i] = mode[i]
+        st.mode_out[k, i] = mode[i]
     counters[0] = k + 1
     return 0
 
 
 @internal()
-def _rhs_failed(ws, y_end, counters):
+def _rhs_failed(st):
     """FAIL_RHS at the time of the failing evaluation; its q, qd to y_end[:2m] and its status to counters[6]."""
+    ws, y_end = st.ws, st.y_end
     m = ws.q.size
     for i in range(m):
         y_end[i] = ws.q[i]
         y_end[m + i] = ws.qd[i]
-    counters[6] = ws.counters[1]
+    st.counters[6] = ws.counters[1]
     return FAIL_RHS, ws.at[0], -1
 
 
@@ -128,53 +182,53 @@ def _due(t_out, k, t_hi):
 
 
 @internal()
-def _failed(outcome, t, ws, y_end, counters):
+def _failed(outcome, t, st):
     """The segment's result for a failure ``outcome`` at t (FAIL_RHS: at the failing evaluation, see _rhs_failed)."""
     if outcome == FAIL_RHS:
-        return _rhs_failed(ws, y_end, counters)
+        return _rhs_failed(st)
     return outcome, t, -1
 
 
 @internal()
-def _start(evaluate, bias, phases, kinematics, method, order, t, y, t_end, first_step, rtol, atol, f, mode, p, lp, ci,
-           cf, ws, tmp, f_new, t_out, y_out, mode_out, counters):
+def _start(evaluate, bias, phases, kinematics, order, t, t_end, first_step, st):
     """f at the start, the samples due there (the run's first segment only) and the first step size:
     -> (0 or FAIL_RHS, FAIL_PROJECTION; h_abs)."""
-    m, r = ws.q.size, dimensions(ci)[1]
-    if rhs(evaluate, bias, phases, t, y, mode, p, lp, ci, cf, ws, f) != 0:
+    ws, counters, y = st.ws, st.counters, st.y
+    m, r = ws.q.size, dimensions(ws.ci)[1]
+    if rhs(evaluate, bias, phases, t, y, ws, st.f) != 0:
         return FAIL_RHS, 0.0
     if counters[4] == 1:
         counters[4] = 0
-        while _due(t_out, counters[0], t):
-            if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+        while _due(st.t_out, counters[0], t):
+            if _store(kinematics, y, st, m, r) != 0:
                 return FAIL_PROJECTION, 0.0
-    if method == RK4_ID or first_step > 0:
+    if st.method == RK4_ID or first_step > 0:
         return 0, first_step
-    h_abs, status = select_initial_step(evaluate, bias, phases, t, y, f, t_end, order, rtol, atol, mode, p, lp, ci, cf,
-                                        ws, tmp, f_new)
+    h_abs, status = select_initial_step(evaluate, bias, phases, t, t_end, order, st)
     return (FAIL_RHS if status != 0 else 0), h_abs
 
 
 @internal()
-def _rk4_step(evaluate, bias, phases, tab, t, y, h_abs, t_end, K, f, y_new, f_new, mode, p, lp, ci, cf, ws, tmp):
-    """One RK4 step, h = min(h_abs, t_end - t), into y_new, f_new: -> (0 or FAIL_RHS, t_new, h)."""
+def _rk4_step(evaluate, bias, phases, t, h_abs, t_end, st):
+    """One RK4 step, h = min(h_abs, t_end - t), into st.y_new, st.f_new: -> (0 or FAIL_RHS, t_new, h)."""
     h = min(h_abs, t_end - t)
-    for i in range(y.size):
+    K, f = st.K, st.f
+    for i in range(f.size):
         K[0, i] = f[i]
-    if stages(evaluate, bias, phases, tab, 4, t, y, h, K, 1, 4, mode, p, lp, ci, cf, ws, tmp) != 0:
+    if stages(evaluate, bias, phases, t, h, 1, 4, st) != 0:
         return FAIL_RHS, t, h
-    combine(tab, 4, y, h, K, y_new)
+    combine(4, h, st)
     t_new = t + h
-    if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+    if rhs(evaluate, bias, phases, t_new, st.y_new, st.ws, st.f_new) != 0:
         return FAIL_RHS, t_new, h
     return 0, t_new, h
 
 
 @internal()
-def _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y, h_abs, t_end, rtol, atol, K, f, y_new,
-                   f_new, mode, p, lp, ci, cf, ws, tmp, counters, bounds):
-    """One accepted step under scipy's error control into y_new, f_new: -> (0, t_new, h, the next h_abs), or
+def _adaptive_step(evaluate, bias, phases, exponent, t, h_abs, t_end, st):
+    """One accepted step under scipy's error control into st.y_new, st.f_new: -> (0, t_new, h, the next h_abs), or
     (FAIL_STEP, FAIL_EVALUATIONS, FAIL_RHS or FAIL_NONFINITE; t; ...)."""
+    ws, counters, bounds, K, f, f_new, n_stages = st.ws, st.counters, st.bounds, st.K, st.f, st.f_new, st.n_stages
     min_step = 10 * max(abs(t) * 2.220446049250313e-16, 5e-324)
     rejected = False
     while True:
@@ -186,16 +240,16 @@ def _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y
         t_new = min(t + h_abs, t_end)
         h = t_new - t
         h_abs = abs(h)
-        for i in range(y.size):
+        for i in range(f.size):
             K[0, i] = f[i]
-        if stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, 1, n_stages, mode, p, lp, ci, cf, ws, tmp) != 0:
+        if stages(evaluate, bias, phases, t, h, 1, n_stages, st) != 0:
             return FAIL_RHS, t, h, h_abs
-        combine(tab, n_stages, y, h, K, y_new)
-        if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+        combine(n_stages, h, st)
+        if rhs(evaluate, bias, phases, t_new, st.y_new, ws, f_new) != 0:
             return FAIL_RHS, t, h, h_abs
-        for i in range(y.size):
+        for i in range(f_new.size):
             K[n_stages, i] = f_new[i]
-        err = error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol)
+        err = error_norm(h, st)
         if not np.isfinite(err):  # a non-finite stage: shrinking the step would only hide it
             return FAIL_NONFINITE, t, h, h_abs
         if err < 1:
@@ -208,9 +262,10 @@ def _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y
 
 
 @internal()
-def _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds):
+def _bounded(t_new, t_end, h, st):
     """Count an accepted step and check the run's bounds after it: -> 0, FAIL_NONFINITE, FAIL_EVALUATIONS or
     FAIL_STALL (see integrate_segment)."""
+    counters, bounds, f_new, ws = st.counters, st.bounds, st.f_new, st.ws
     counters[1] += 1
     for i in range(f_new.size):
         if not np.isfinite(f_new[i]):  # RK4 (no error estimate) or an infinite error estimate
@@ -218,7 +273,7 @@ def _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds):
     if counters[2] + ws.counters[0] >= bounds[0]:
         counters[2] += ws.counters[0]
         return FAIL_EVALUATIONS
-    if method != RK4_ID and t_new < t_end:
+    if st.method != RK4_ID and t_new < t_end:
         counters[5] = counters[5] + 1 if h < bounds[1] else 0
         if counters[5] >= bounds[2]:
             counters[2] += ws.counters[0]
@@ -227,22 +282,20 @@ def _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds):
 
 
 @internal()
-def _earliest_switch(evaluate, bias, phases, indicators, method, tab, n_stages, n_rows, t_old, h, y, t_new, y_new, f,
-                     f_new, K, D, mode, p, lp, ci, cf, ws, tmp, g_new, g_tmp):
+def _earliest_switch(evaluate, bias, phases, indicators, t_old, h, t_new, st):
     """The earliest crossing in the step of a switching function that ended it off its mode's side, located on the
-    step's interpolant (set up into D on the first one): -> (0, t_e, i_e or -1 for none, dense ready), or FAIL_RHS,
-    or FAIL_LOCATE with the i whose crossing cannot be located (``study.laws.events.crossing_finder``)."""
-    if event_values(evaluate, bias, phases, indicators, t_new, y_new, mode, p, lp, ci, cf, ws, g_new) != 0:
+    step's interpolant (set up into st.D on the first one): -> (0, t_e, i_e or -1 for none, dense ready), or
+    FAIL_RHS, or FAIL_LOCATE with the i whose crossing cannot be located (``study.laws.events.crossing_finder``)."""
+    g_new, mode = st.g_new, st.ws.mode
+    if event_values(evaluate, bias, phases, indicators, t_new, st.y_new, st.ws, g_new) != 0:
         return FAIL_RHS, t_new, -1, False
     t_e, i_e, dense_ready = np.inf, -1, False
     for i in range(g_new.size):
         if g_new[i] * mode[i] < 0:
             if not dense_ready:
-                dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D, mode, p,
-                            lp, ci, cf, ws, tmp)
+                dense_setup(evaluate, bias, phases, t_old, h, st)
                 dense_ready = True
-            root = first_crossing(mode[i], t_old, t_new, i, evaluate, bias, phases, indicators, method, D, n_rows,
-                                  t_old, h, y, mode, p, lp, ci, cf, ws, tmp, g_tmp)
+            root = first_crossing(mode[i], t_old, t_new, i, evaluate, bias, phases, indicators, t_old, h, st)
             if np.isnan(root):
                 return FAIL_LOCATE, t_old, i, dense_ready
             if root < t_e:
@@ -251,42 +304,44 @@ def _earliest_switch(evaluate, bias, phases, indicators, method, tab, n_stages, 
 
 
 @internal()
-def _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new, f, f_new, K, D,
-                 dense_ready, t_hi, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out, counters):
-    """The output times due up to t_hi from the step's interpolant (set up into D if not ready): -> 0 or
+def _sample_step(evaluate, bias, phases, kinematics, t_old, h, dense_ready, t_hi, st):
+    """The output times due up to t_hi from the step's interpolant (set up into st.D if not ready): -> 0 or
     FAIL_PROJECTION."""
-    m, r = ws.q.size, dimensions(ci)[1]
+    ws, counters, t_out, tmp = st.ws, st.counters, st.t_out, st.tmp
+    m, r = ws.q.size, dimensions(ws.ci)[1]
     while _due(t_out, counters[0], t_hi):
         if not dense_ready:
-            dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y, y_new, f, f_new, K, D, mode, p, lp,
-                        ci, cf, ws, tmp)
+            dense_setup(evaluate, bias, phases, t_old, h, st)
             dense_ready = True
         tk = t_out[counters[0]]
-        dense_eval(method, D, n_rows, y, (tk - t_old) / h, tmp)
-        if _store(kinematics, tk, tmp, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+        dense_eval((tk - t_old) / h, st, tmp)
+        if _store(kinematics, tmp, st, m, r) != 0:
             return FAIL_PROJECTION
     return 0
 
 
 @internal()
-def _project_step(evaluate, bias, phases, kinematics, t_new, y_new, f_new, mode, p, lp, ci, cf, ws, counters):
-    """The post-step projection of y_new (f_new evaluated again if it moved): -> 0, FAIL_PROJECTION or FAIL_RHS."""
-    changed, status = project(kinematics, y_new, p, ci, cf, ws.q.size, dimensions(ci)[1])
+def _project_step(evaluate, bias, phases, kinematics, t_new, st):
+    """The post-step projection of st.y_new (st.f_new evaluated again if it moved): -> 0, FAIL_PROJECTION or
+    FAIL_RHS."""
+    ws = st.ws
+    changed, status = project(kinematics, st.y_new, ws, ws.q.size, dimensions(ws.ci)[1])
     if status != 0:
         return FAIL_PROJECTION
     if changed:
-        counters[3] += 1
-        if rhs(evaluate, bias, phases, t_new, y_new, mode, p, lp, ci, cf, ws, f_new) != 0:
+        st.counters[3] += 1
+        if rhs(evaluate, bias, phases, t_new, st.y_new, ws, st.f_new) != 0:
             return FAIL_RHS
     return 0
 
 
 @internal()
-def _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end):
+def _finish(kinematics, t, st):
     """The end of the run reached: the output times due at t (the last equals t_end), the state to y_end."""
-    m, r = ws.q.size, dimensions(ci)[1]
-    while counters[0] < t_out.size and _due(t_out, counters[0], t + 1e-300):
-        if _store(kinematics, t_out[counters[0]], y, mode, p, ci, cf, m, r, t_out, y_out, mode_out, counters) != 0:
+    ws, counters, y, y_end = st.ws, st.counters, st.y, st.y_end
+    m, r = ws.q.size, dimensions(ws.ci)[1]
+    while counters[0] < st.t_out.size and _due(st.t_out, counters[0], t + 1e-300):
+        if _store(kinematics, y, st, m, r) != 0:
             return FAIL_PROJECTION, t, -1
     for i in range(y.size):
         y_end[i] = y[i]
@@ -296,7 +351,8 @@ def _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, count
 
 @kernel()   # compiled (or loaded) for SEGMENT on first use (study.fast.frontend.entry)
 def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, tab, n_stages, order, n_rows, t0, y0,
-                      t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds):
+                      t_end, first_step, rtol, atol, mode, p, lp, ci, t_out, cf, y_out, mode_out, counters, y_end, bounds,
+                      work, steps):
     """Integrate from (t0, y0) to t_end or the first switch; see the module docstring.
 
     counters (int64): [k_out, steps, nfev, projections, take the t0 sample (1/0), accepted steps in a row
@@ -305,63 +361,53 @@ def integrate_segment(evaluate, bias, phases, indicators, kinematics, method, ta
     FAIL_EVALUATIONS once the evaluations of the whole run reach max_evaluations, and with FAIL_STALL after
     min_step_run accepted adaptive steps in a row shorter than min_step.
     Returns (outcome, t reached, index of the switching function that crossed or -1); the state
-    reached is written to y_end (FAIL_RHS: the time and the q, qd of the failing evaluation).
+    reached is written to y_end (FAIL_RHS: the time and the q, qd of the failing evaluation). work and steps: the
+    zeroed arrays of ``study.fast.dynamics.work_arrays`` and :func:`segment_arrays`, fresh for each segment.
     """
-    n = y0.size
+    ws = workspace(work, mode, p, lp, ci, cf)
     m, r, nc, nw, npin = dimensions(ci)
-    ws = workspace(m, r, nc, nw, npin)
-    n_events = ci[CI_NLOADMODE] + (2 * (nc + npin) if ci[CI_SWITCHED] == 1 else 0)
-    n_k = tab[0].shape[0] if method == DOP853_ID else n_stages + 1  # DOP853: the 16 extended stages
-    K, D = np.zeros((max(n_k, 4), n)), np.zeros((max(n_rows, 4), n))
-    y, y_new, f, f_new, tmp = y0.copy(), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    g_new, g_tmp = np.empty(max(n_events, 1)), np.empty(max(n_events, 1))
+    n_events = event_count(ci, nc, npin)
+    st = integration_state(ws, method, tab, n_stages, n_rows, rtol, atol, y0, steps, t_out, y_out, mode_out,
+                           counters, y_end, bounds)
+    y, y_new, f, f_new = st.y, st.y_new, st.f, st.f_new
+    n = y.size
     t = t0
-    status, h_abs = _start(evaluate, bias, phases, kinematics, method, order, t, y, t_end, first_step, rtol, atol, f,
-                           mode, p, lp, ci, cf, ws, tmp, f_new, t_out, y_out, mode_out, counters)
+    status, h_abs = _start(evaluate, bias, phases, kinematics, order, t, t_end, first_step, st)
     if status != 0:
-        return _failed(status, t, ws, y_end, counters)
+        return _failed(status, t, st)
     exponent = -1.0 / (order + 1)
     while t < t_end:
         t_old = t
         if method == RK4_ID:   # --- one accepted step ---------------------------------------------------------
-            status, t_new, h = _rk4_step(evaluate, bias, phases, tab, t, y, h_abs, t_end, K, f, y_new, f_new, mode, p,
-                                         lp, ci, cf, ws, tmp)
+            status, t_new, h = _rk4_step(evaluate, bias, phases, t, h_abs, t_end, st)
         else:
-            status, t_new, h, h_abs = _adaptive_step(evaluate, bias, phases, method, tab, n_stages, exponent, t, y,
-                                                     h_abs, t_end, rtol, atol, K, f, y_new, f_new, mode, p, lp, ci, cf,
-                                                     ws, tmp, counters, bounds)
+            status, t_new, h, h_abs = _adaptive_step(evaluate, bias, phases, exponent, t, h_abs, t_end, st)
         if status == 0:
-            status = _bounded(method, t_new, t_end, h, f_new, ws, counters, bounds)
+            status = _bounded(t_new, t_end, h, st)
         if status != 0:
-            return _failed(status, t_new, ws, y_end, counters)
+            return _failed(status, t_new, st)
         dense_ready = False
         if n_events > 0:   # --- 1. switches -------------------------------------------------------------------
-            status, t_e, i_e, dense_ready = _earliest_switch(evaluate, bias, phases, indicators, method, tab, n_stages,
-                                                             n_rows, t_old, h, y, t_new, y_new, f, f_new, K, D, mode, p,
-                                                             lp, ci, cf, ws, tmp, g_new, g_tmp)
+            status, t_e, i_e, dense_ready = _earliest_switch(evaluate, bias, phases, indicators, t_old, h, t_new, st)
             if status == FAIL_LOCATE:
                 counters[2] += ws.counters[0]
                 return FAIL_LOCATE, t_old, i_e
             if status != 0:
-                return _failed(status, t_new, ws, y_end, counters)
+                return _failed(status, t_new, st)
             if i_e >= 0:
-                dense_eval(method, D, n_rows, y, (t_e - t_old) / h, y_end)
-                if _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new,
-                                f, f_new, K, D, True, t_e, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out,
-                                counters) != 0:
+                dense_eval((t_e - t_old) / h, st, y_end)
+                if _sample_step(evaluate, bias, phases, kinematics, t_old, h, True, t_e, st) != 0:
                     return FAIL_PROJECTION, t, -1
                 counters[2] += ws.counters[0]
                 return EVENT, t_e, i_e
         # --- 3. samples (before the projection, as in the reference), 2. projection ------------------------------
-        if _sample_step(evaluate, bias, phases, kinematics, method, tab, n_stages, n_rows, t_old, h, y, y_new, f, f_new,
-                        K, D, dense_ready, t_new, mode, p, lp, ci, cf, ws, tmp, t_out, y_out, mode_out, counters) != 0:
+        if _sample_step(evaluate, bias, phases, kinematics, t_old, h, dense_ready, t_new, st) != 0:
             return FAIL_PROJECTION, t, -1
         if ci[CI_PROJECTS] == 1:
-            status = _project_step(evaluate, bias, phases, kinematics, t_new, y_new, f_new, mode, p, lp, ci, cf, ws,
-                                   counters)
+            status = _project_step(evaluate, bias, phases, kinematics, t_new, st)
             if status != 0:
-                return _failed(status, t_new, ws, y_end, counters)
+                return _failed(status, t_new, st)
         t = t_new
         for i in range(n):   # elementwise: a slice assignment compiles numba's shape check and its message
             y[i], f[i] = y_new[i], f_new[i]
-    return _finish(kinematics, t, y, mode, p, ci, cf, ws, t_out, y_out, mode_out, counters, y_end)
+    return _finish(kinematics, t, st)

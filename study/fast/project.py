@@ -10,13 +10,15 @@ from study.laws.projection import OK, project as projection
 
 
 @internal()
-def project(kinematics, y, p, ci, cf, m, r):
-    """Project y = [q, qd, ...] in place; returns (changed, status), status 0 (OK) or the law's failure code.
+def project(kinematics, y, ws, m, r):
+    """Project y = [q, qd, ...] in place with the parameters and options in the workspace ``ws``
+    (study.fast.dynamics.workspace); returns (changed, status), status 0 (OK) or the law's failure code.
     ``kinematics`` None: the loop compiled for runs without projection (study.fast.loop.segment_signature)."""
     if kinematics is None:
         return False, OK
+    ci, cf = ws.ci, ws.cf
     q, qd = y[:m].copy(), y[m:2 * m].copy()
-    changed, status = projection(kinematics, q, qd, p, r, cf[CF_PROJ_TOL], ci[CI_PROJ_MASS] == 1,
+    changed, status = projection(kinematics, q, qd, ws.p, r, cf[CF_PROJ_TOL], ci[CI_PROJ_MASS] == 1,
                                  ci[CI_PROJ_MAXITER], cf[ci[CI_BIAS]])
     if changed:
         for i in range(m):

@@ -8,6 +8,9 @@ up to round-off. RK4 is ``study.solver.integrate.RK4`` (cubic Hermite dense outp
 
 Dense output is built only for steps that need it (an output time or a switch inside the step),
 unlike the reference loop, which builds it for every step (3 extra evaluations per DOP853 step).
+
+The steps work on the segment's integration state ``st`` (``study.fast.loop.integration_state``: the tableau, the
+stages K, the interpolant D, the step's y, y_new, f, f_new and the evaluation workspace), one pointer per call.
 """
 
 from __future__ import annotations
@@ -47,9 +50,10 @@ def tableau(method: str) -> tuple:
 
 
 @internal()
-def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol, atol, mode, p, lp, ci, cf, ws, tmp,
-                        f1):
-    """scipy.integrate._ivp.common.select_initial_step (Hairer, Norsett & Wanner II.4)."""
+def select_initial_step(evaluate, bias, phases, t0, t_bound, order, st):
+    """scipy.integrate._ivp.common.select_initial_step (Hairer, Norsett & Wanner II.4) from (t0, st.y) with
+    f0 = st.f; st.tmp and st.f_new are overwritten."""
+    y0, f0, tmp, f1, rtol, atol = st.y, st.f, st.tmp, st.f_new, st.rtol, st.atol
     n = y0.size
     interval = abs(t_bound - t0)
     if interval == 0.0:
@@ -64,7 +68,7 @@ def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol
     h0 = min(h0, interval)
     for i in range(n):
         tmp[i] = y0[i] + h0 * f0[i]
-    status = rhs(evaluate, bias, phases, t0 + h0, tmp, mode, p, lp, ci, cf, ws, f1)
+    status = rhs(evaluate, bias, phases, t0 + h0, tmp, st.ws, f1)
     d2 = 0.0
     for i in range(n):
         sc = atol + abs(y0[i]) * rtol
@@ -78,9 +82,9 @@ def select_initial_step(evaluate, bias, phases, t0, y0, f0, t_bound, order, rtol
 
 
 @internal()
-def stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, first, last, mode, p, lp, ci, cf, ws, tmp):
-    """K[s] = f(t + C[s] h, y + h sum_j A[s, j] K[j]) for s in first..last-1; returns a status."""
-    A, C = tab[0], tab[2]
+def stages(evaluate, bias, phases, t, h, first, last, st):
+    """st.K[s] = f(t + C[s] h, y + h sum_j A[s, j] K[j]) for s in first..last-1, y = st.y; returns a status."""
+    A, C, K, y, tmp, ws = st.ta, st.tc, st.K, st.y, st.tmp, st.ws
     n = y.size
     for s in range(first, last):
         for i in range(n):
@@ -88,18 +92,20 @@ def stages(evaluate, bias, phases, tab, n_stages, t, y, h, K, first, last, mode,
             for j in range(s):
                 acc += A[s, j] * K[j, i]
             tmp[i] = y[i] + h * acc
-        status = rhs(evaluate, bias, phases, t + C[s] * h, tmp, mode, p, lp, ci, cf, ws, K[s])
+        status = rhs(evaluate, bias, phases, t + C[s] * h, tmp, ws, K[s])
         if status != 0:
             return status
     return 0
 
 
 @internal()
-def error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol):
-    """scipy's error norm of an embedded pair (DOP853: its combined 5th/3rd-order estimate)."""
+def error_norm(h, st):
+    """scipy's error norm of an embedded pair (DOP853: its combined 5th/3rd-order estimate) of the step from st.y
+    to st.y_new."""
+    K, y, y_new, rtol, atol, n_stages = st.K, st.y, st.y_new, st.rtol, st.atol, st.n_stages
     n = y.size
-    if method == DOP853_ID:
-        E3, E5 = tab[4], tab[5]
+    if st.method == DOP853_ID:
+        E3, E5 = st.te3, st.te5
         e5, e3 = 0.0, 0.0
         for i in range(n):
             sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
@@ -112,7 +118,7 @@ def error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol):
         if e5 == 0.0 and e3 == 0.0:
             return 0.0
         return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
-    E = tab[3]
+    E = st.te
     acc2 = 0.0
     for i in range(n):
         sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
@@ -124,9 +130,9 @@ def error_norm(method, tab, n_stages, K, h, y, y_new, rtol, atol):
 
 
 @internal()
-def combine(tab, n_stages, y, h, K, y_new):
-    """y_new = y + h sum_s B[s] K[s]."""
-    B = tab[1]
+def combine(n_stages, h, st):
+    """st.y_new = y + h sum_s B[s] K[s]."""
+    B, K, y, y_new = st.tb, st.K, st.y, st.y_new
     for i in range(y.size):
         acc = 0.0
         for s in range(n_stages):
@@ -135,18 +141,19 @@ def combine(tab, n_stages, y, h, K, y_new):
 
 
 @internal()
-def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, y_new, f_old, f_new, K, D,
-                mode, p, lp, ci, cf, ws, tmp):
-    """Coefficients D of the step's interpolant (scipy's RkDenseOutput / Dop853DenseOutput / Hermite)."""
+def dense_setup(evaluate, bias, phases, t_old, h, st):
+    """Coefficients st.D of the step's interpolant from st.y to st.y_new (scipy's RkDenseOutput / Dop853DenseOutput /
+    Hermite)."""
+    method, n_stages, K, D = st.method, st.n_stages, st.K, st.D
+    y_old, y_new, f_old, f_new = st.y, st.y_new, st.f, st.f_new
     n = y_old.size
     if method == RK4_ID:
         for i in range(n):
             D[0, i], D[1, i], D[2, i], D[3, i] = y_old[i], y_new[i], h * f_old[i], h * f_new[i]
         return 0
     if method == DOP853_ID:
-        status = stages(evaluate, bias, phases, tab, n_stages, t_old, y_old, h, K, n_stages + 1, K.shape[0],
-                        mode, p, lp, ci, cf, ws, tmp)
-        Dm = tab[6]
+        status = stages(evaluate, bias, phases, t_old, h, n_stages + 1, K.shape[0], st)
+        Dm = st.tp
         for i in range(n):
             dy = y_new[i] - y_old[i]
             D[0, i] = dy
@@ -158,7 +165,7 @@ def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, 
                     acc += Dm[r, s] * K[s, i]
                 D[3 + r, i] = h * acc
         return status
-    P = tab[6]
+    P = st.tp
     for r in range(P.shape[1]):
         for i in range(n):
             acc = 0.0
@@ -169,8 +176,9 @@ def dense_setup(evaluate, bias, phases, method, tab, n_stages, t_old, h, y_old, 
 
 
 @internal()
-def dense_eval(method, D, n_rows, y_old, x, out):
-    """The step's interpolant at x = (t - t_old) / h."""
+def dense_eval(x, st, out):
+    """The step's interpolant (st.D, from st.y) at x = (t - t_old) / h, into out."""
+    method, n_rows, D, y_old = st.method, st.n_rows, st.D, st.y
     n = y_old.size
     if method == RK4_ID:
         h00, h10 = 2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x
