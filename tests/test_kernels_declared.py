@@ -66,3 +66,16 @@ def test_a_first_class_use_compiles_the_declared_signature_only():
 
     assert apply(f, 0.25) == 1.5
     assert f.signatures == [SCALE.args]
+
+
+def test_importing_study_sets_numbas_optimization_level_unless_the_user_did():
+    """study sets NUMBA_OPT=1 before numba is imported (study/__init__.py gives the reason); the user's value wins."""
+    import os
+    import subprocess
+    import sys
+
+    code = "import study, numba; print(int(numba.config.OPT))"
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_OPT"}
+    levels = [subprocess.run([sys.executable, "-c", code], env={**env, **extra}, capture_output=True, text=True,
+                             check=True).stdout.split()[-1] for extra in ({}, {"NUMBA_OPT": "3"})]
+    assert levels == ["1", "3"]
