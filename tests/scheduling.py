@@ -28,49 +28,55 @@ UNITS = {
 }
 #: The files (or units) that go first, in this order. The first compiles the compiled path; the next five use no
 #: compiled code (sympy, the reference path, Exudyn) and keep the other worker busy meanwhile (more CPU on a cold
-#: cache than the compilation and the first file). Then the rest of the files that took over 5 s in a cold run of
-#: the fast suite (tests' seconds, both workers busy; the spatial files as measured cold after the spatial CSE
-#: without factor_terms and the spatial slider-crank's compiled run moved to the slow suite), longest first, so
-#: that the short files left at the end even out the two workers.
+#: cache than the compilation and the first file). Then every other file that took over 5 s of CPU, longest first,
+#: so that the short files left at the end even out the two workers: each file run alone on a cold cache
+#: (``-n 0``, a fresh STUDY_CACHE_DIR, user + system seconds) at main 1c51fe9 with the round-3 cache tries and
+#: slip_then_stick's index-3 Exudyn runs in the slow suite. The spatial friction, Bricard peer and heavy-top files
+#: (13-31 s) were not named before and came last, after every named file.
 LEAD = (
-    "tests/test_fast.py",
-    "tests/test_spatial_exudyn.py",
-    CV + "frictionless_runs",
-    CV + "test_friction_variants.py",
-    "tests/test_errata.py",
-    "tests/test_coordinates.py",
-    "tests/test_reliability_round3.py",
-    "tests/test_moving_friction_study.py",
-    "tests/test_backend_samples.py",
-    "tests/test_spatial_joints.py",
-    "tests/test_free_bodies.py",
-    "tests/test_spatial_bricard.py",
-    "tests/test_pipeline.py",
-    "tests/test_bench_compile_time.py",
-    "tests/test_spatial_compiled.py",
-    "tests/test_studies.py",
-    "tests/test_solver.py",
-    "tests/test_exudyn_pin_friction.py",
-    "tests/test_revolute_friction.py",
-    "tests/test_spatial_slider_crank.py",
-    "tests/test_reliability_catalogue.py",
-    "tests/test_codegen.py",
-    "tests/test_validation.py",
-    "tests/test_bench_report.py",
-    "tests/test_report_figure_cache.py",
-    "tests/test_reliability.py",
-    "tests/test_report.py",
-    "tests/test_moving_guide_friction.py",
-    "tests/test_index3.py",
-    "tests/test_slider_crank_pins.py",
-    "tests/test_reliability_probe.py",
-    "tests/test_examples.py",
-    "tests/test_friction_defaults.py",
-    "tests/test_andrews.py",
-    "tests/test_friction.py",
+    "tests/test_fast.py",                               # 52
+    "tests/test_spatial_exudyn.py",                     # 12
+    CV + "frictionless_runs",                           # 18 + 18 + 18 alone, less together
+    CV + "test_friction_variants.py",                   # 28
+    "tests/test_errata.py",                             # 16
+    "tests/test_coordinates.py",                        # 31
+    "tests/test_backend_samples.py",                    # 55
+    "tests/test_studies.py",                            # 50
+    "tests/test_moving_friction_study.py",              # 45
+    "tests/test_reliability_round3.py",                 # 40
+    "tests/test_solver.py",                             # 37
+    "tests/test_examples.py",                           # 37
+    "tests/test_spatial_compiled.py",                   # 32
+    "tests/test_moving_guide_friction.py",              # 32
+    "tests/test_spatial_friction.py",                   # 31
+    "tests/test_validation.py",                         # 29
+    "tests/test_pipeline.py",                           # 25
+    "tests/test_fast_pin_friction.py",                  # 24
+    "tests/test_revolute_friction.py",                  # 22
+    "tests/test_report.py",                             # 21
+    "tests/test_exudyn_pin_friction.py",                # 20
+    "tests/test_friction.py",                           # 19
+    "tests/test_free_bodies.py",                        # 18
+    "tests/test_spatial_slider_crank.py",               # 17
+    "tests/test_reliability.py",                        # 17
+    "tests/test_spatial_bricard.py",                    # 15
+    "tests/test_spatial_friction_carriage.py",          # 13
+    "tests/test_spatial_friction_exudyn.py",            # 13
+    "tests/test_spatial_bricard_peer.py",               # 12
+    "tests/test_spatial_heavy_top.py",                  # 12
+    "tests/test_friction_defaults.py",                  # 10
+    "tests/test_slider_crank_pins.py",                  # 10
+    "tests/test_reliability_probe.py",                  # 9
+    "tests/test_bench_compile_time.py",                 # 8
+    "tests/test_codegen.py",                            # 7
+    "tests/test_bench_report.py",                       # 7
+    "tests/test_report_figure_cache.py",                # 7
+    "tests/test_reliability_catalogue.py",              # 6
+    "tests/test_spatial_joints.py",                     # 6
+    "tests/test_andrews.py",                            # 6
+    "tests/test_index3.py",                             # 5
     "tests/test_user_file.py",
     "tests/test_engines.py",
-    "tests/test_fast_pin_friction.py",
     "tests/test_bench_cases.py",
 )
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import pickle
 import sys
 import warnings
 
@@ -58,13 +59,28 @@ def _load(path, name):
     return module
 
 
-def test_a_damaged_entry_is_discarded_and_recompiled(monkeypatch, tmp_path):
+def _overwrite(path):
+    path.write_bytes(b"garbage")
+
+
+def _cut_in_half(path):
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def _valid_pickle_wrong_content(path):
+    path.write_bytes(pickle.dumps(("not", "a", "compiled", "function")))
+
+
+# the damages of tests/round3/caches.py, which makes the same three in a real process (two in the slow suite)
+@pytest.mark.parametrize("suffix, damage", [("nbi", _overwrite), ("nbc", _cut_in_half),
+                                            ("nbc", _valid_pickle_wrong_content)])
+def test_a_damaged_entry_is_discarded_and_recompiled(monkeypatch, tmp_path, suffix, damage):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     source = tmp_path / "kernels_under_test.py"
     source.write_text(SOURCE)
     assert _load(source, "kernels_under_test").twice(2.0) == 4.0          # compiled and saved
     index = next((tmp_path / "numba").rglob("*.twice-*.nbi"))
-    index.write_bytes(b"garbage")
+    damage(next((tmp_path / "numba").rglob(f"*.twice-*.{suffix}")))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         assert _load(source, "kernels_under_test").twice(3.0) == 6.0      # a new dispatcher: loads, fails, heals

@@ -690,7 +690,9 @@ def isolate(tmp: Path) -> None:
 
 @pytest.fixture
 def isolated(tmp_path, monkeypatch):
-    monkeypatch.setenv("STUDY_CACHE_DIR", "")
+    # restored after the try; unchanged until isolate() links the configured cache (not the checkout's, when
+    # STUDY_CACHE_DIR names another)
+    monkeypatch.setenv("STUDY_CACHE_DIR", os.environ.get("STUDY_CACHE_DIR", ""))
     monkeypatch.chdir(tmp_path)
     isolate(tmp_path)
     return tmp_path
