@@ -152,7 +152,7 @@ def _mechanism_entry(damage, pattern):
 add(G, "mechanism_nbi_empty_is_recompiled",
     _mechanism_entry(lambda p: p.write_bytes(b""), "study_fast_quick_return_*.evaluate-*.nbi"), OK, slow=True)
 add(G, "mechanism_nbc_truncated_is_recompiled",
-    _mechanism_entry(lambda p: p.write_bytes(p.read_bytes()[:100]), "study_fast_quick_return_*.kinematics-*.nbc"), OK,
+    _mechanism_entry(lambda p: p.write_bytes(p.read_bytes()[:100]), "study_fast_quick_return_*.indicators-*.nbc"), OK,
     slow=True)
 
 
