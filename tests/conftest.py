@@ -1,7 +1,35 @@
 """Test-session settings shared by every test module."""
 
+import tomllib
+from pathlib import Path
+
 import pytest
 from threadpoolctl import threadpool_limits
+
+SLOW_TIER = Path(__file__).with_name("slow_tier.toml")
+
+
+def slow_tier() -> set[str]:
+    """The node ids tests/slow_tier.toml moves to the slow tier (make verify), each group with its reason."""
+    with SLOW_TIER.open("rb") as f:
+        return {test for group in tomllib.load(f)["group"] for test in group["tests"]}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Mark the tests of tests/slow_tier.toml ``slow`` before ``-m`` selects; a listed test missing from a file
+    that was collected whole is an error naming it, so the list cannot go stale silently."""
+    listed = slow_tier()
+    collected = {item.nodeid for item in items}
+    for item in items:
+        if item.nodeid in listed:
+            item.add_marker(pytest.mark.slow)
+    whole = {str(a).split("::")[0] for a in config.args if "::" not in str(a)}
+    files = {item.nodeid.split("::")[0] for item in items}
+    stale = sorted(t for t in listed - collected if t.split("::")[0] in files
+                   and (not whole or any(t.startswith(w.rstrip("/")) for w in whole)))
+    if stale and not config.getoption("keyword"):
+        raise pytest.UsageError(f"{SLOW_TIER.name} lists {stale[0]!r}, which is not a test (renamed or removed?)")
 
 
 @pytest.fixture(autouse=True, scope="session")
