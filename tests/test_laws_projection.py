@@ -3,6 +3,8 @@ unit circle typed here by hand: Phi = x^2 + y^2 - 1 (and the same row twice, a J
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pytest
 from numba import njit, types
@@ -15,7 +17,6 @@ from study.solver.stabilization import Projection
 MASSES = (2.0, 0.5)
 
 
-@njit(KINEMATICS)
 def circle(q, p, phi, J, M):
     """Phi_k = (k + 1) (x^2 + y^2 - 1) for each of the r rows (r = phi.size), M = diag(MASSES)."""
     for k in range(phi.size):
@@ -24,19 +25,27 @@ def circle(q, p, phi, J, M):
     M[0, 0], M[0, 1], M[1, 0], M[1, 1] = MASSES[0], 0.0, 0.0, MASSES[1]
 
 
-@njit(types.Tuple((types.boolean, i8))(KINEMATICS_T, V1, V1, V1, i8, f8, types.boolean, i8, f8))
-def compiled(kinematics, q, qd, p, r, tol, mass, max_iter, rcond):
+def _project(kinematics, q, qd, p, r, tol, mass, max_iter, rcond):
     """The law as the compiled loop calls it (the kinematics a first-class function)."""
     return project(kinematics, q, qd, p, r, tol, mass, max_iter, rcond)
+
+
+@lru_cache(maxsize=None)
+def compiled_pair():
+    """(circle, the law) compiled for their signatures on first use, not when the module is collected (every
+    xdist worker collects every file)."""
+    law = njit(types.Tuple((types.boolean, i8))(KINEMATICS_T, V1, V1, V1, i8, f8, types.boolean, i8, f8))(_project)
+    return njit(KINEMATICS)(circle), law
 
 
 def run(backend: str, q, qd, r: int = 1, mass: bool = False, max_iter: int = 10):
     q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
     args = (q, qd, np.zeros(0), r, Projection().tol, mass, max_iter, tolerance("singular_ratio"))
     if backend == "compiled":
-        changed, status = compiled(circle, *args)
+        kinematics, law = compiled_pair()
+        changed, status = law(kinematics, *args)
     else:
-        changed, status = project.py_func(circle.py_func, *args)
+        changed, status = project.py_func(circle, *args)
     return q, qd, changed, status
 
 
