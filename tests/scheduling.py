@@ -2,7 +2,8 @@
 
 xdist's ``loadfile`` gives whole files to the workers, the files with most tests first. On a cold cache that
 costs minutes: the files with few but long tests came last and one worker finished them alone, and the compiled
-path's first compilation (study.fast, under its lock, study.kernels.cache.compile_lock) made the other worker wait
+path's first compilation (study.fast, then under one lock for every compilation; now one per kernel,
+study.kernels.cache.compile_lock) made the other worker wait
 idle for it as soon as it reached a compiled test too. Here the files of LEAD go first, in its order: the compiled
 path's own tests on one worker (it compiles), while the other runs files that need only the reference path, sympy
 and Exudyn; then the other long files, longest first (by a cold run of the fast suite on two workers). The files

@@ -58,7 +58,7 @@ def entry(dispatcher, signature):
     signature on first use, under the compile lock: a run pays only for the entries it calls (the compiled loop;
     scipy's integrators on compiled evaluations call ``rhs_entry`` alone)."""
     if signature.args not in dispatcher.overloads:
-        with compile_lock():
+        with compile_lock(f"{_qualified(dispatcher)} {signature}"):
             dispatcher.disable_compile(False)
             dispatcher.compile(signature)
             dispatcher.disable_compile()
@@ -333,11 +333,18 @@ def compile_kernels(s: Setup) -> None:
     otherwise be in the run's first segment."""
     phases, kinematics = loop_kernels(s)
     module = s.model.module
-    with compile_lock():
-        for kernel, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS), (s.bias, BIAS),
-                                  (phases, PHASES), (kinematics, KINEMATICS)):
-            if kernel is not None:
-                kernel.get_compile_result(signature)
+    kernels = [(k, signature) for k, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS),
+                                                    (s.bias, BIAS), (phases, PHASES), (kinematics, KINEMATICS))
+               if k is not None]
+    with compile_lock(" ".join(_qualified(k) for k, _ in kernels)):
+        for kernel, signature in kernels:
+            kernel.get_compile_result(signature)
+
+
+def _qualified(kernel) -> str:
+    """A kernel's module and qualified name: the same in every process (the name of its compile lock)."""
+    f = getattr(kernel, "py_func", kernel)
+    return f"{getattr(f, '__module__', '')}.{getattr(f, '__qualname__', type(f).__name__)}"
 
 
 def run(s: Setup, t_end: float, t_out: np.ndarray, integrator: str, rtol: float, atol: float, step,

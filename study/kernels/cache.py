@@ -20,6 +20,7 @@ its own (its code is in the entry of each kernel that calls it, :mod:`study.kern
 
 from __future__ import annotations
 
+import hashlib
 import os
 import threading
 import warnings
@@ -179,23 +180,27 @@ def internal():
 
 
 @contextmanager
-def compile_lock():
-    """Hold an exclusive lock on numba's cache folder while the compiled path's kernels compile or load: the
-    frontend's entry kernels and the kernels with declared signatures that a compiled run passes to its loop (its
-    generated ``evaluate``..., ``study.fast.frontend.compile_kernels``), each on first use. Two processes that start
-    together (the test workers, the pipeline's) would otherwise both compile the same kernels; the second waits and
-    loads what the first saved. The small kernels that the reference path calls from Python (the sgn functions, the
-    stabilization biases, the friction phases) compile on first use outside it.
+def compile_lock(name: str):
+    """Hold an exclusive lock named ``name`` in numba's cache folder while what it names compiles or loads: an
+    entry kernel for its signature (:func:`study.fast.frontend.entry`), or the kernels with declared signatures that
+    a compiled run passes to its loop (its generated ``evaluate``..., ``study.fast.frontend.compile_kernels``).
+    Two processes that start together (the test workers, the pipeline's) would otherwise both compile the same
+    kernel; the second waits and loads what the first saved. Different names compile side by side: one lock for
+    every compilation made one process wait, idle, for the other's. A thread holds one lock at a time (one taken
+    inside another is not taken), so two processes never wait for each other. The small kernels that the
+    reference path calls from Python (the sgn functions, the stabilization biases, the friction phases) compile on
+    first use outside it.
     Where ``fcntl`` is missing (not POSIX) there is no lock: each process compiles, with the same result. The
     folder is checked first (:func:`numba_dir`)."""
     try:
         import fcntl
     except ImportError:
         fcntl = None
-    if fcntl is None or getattr(_state, "held", False):   # held by this thread already: flock would wait for itself
+    if fcntl is None or getattr(_state, "held", False):   # a lock held by this thread already: no second one
         yield
         return
-    with open(numba_dir() / "compile.lock", "w") as fh:
+    digest = hashlib.sha256(name.encode()).hexdigest()[:16]
+    with open(numba_dir() / f"compile-{digest}.lock", "w") as fh:
         fcntl.flock(fh, fcntl.LOCK_EX)
         _state.held = True
         try:
