@@ -27,7 +27,7 @@ def pytest_collection_modifyitems(config, items):
     whole = {str(a).split("::")[0] for a in config.args if "::" not in str(a)}
     files = {item.nodeid.split("::")[0] for item in items}
     stale = sorted(t for t in listed - collected if t.split("::")[0] in files
-                   and (not whole or any(t.startswith(w.rstrip("/")) for w in whole)))
+                   and any(t.startswith(w.rstrip("/")) for w in whole))
     if stale and not config.getoption("keyword"):
         raise pytest.UsageError(f"{SLOW_TIER.name} lists {stale[0]!r}, which is not a test (renamed or removed?)")
 
