@@ -46,14 +46,18 @@ def test_contents_go_after_the_named_section_or_before_the_first_heading():
 
 
 def test_the_spatial_answer_reads_bricard_and_the_joint_friction_from_their_tables():
-    """Bricard's A04 energy ratio and the carriage's stick times in the committed answer are the tables' values."""
+    """Bricard's A04 energy ratios over the benchmark's horizon, in-house and in Exudyn (each against the in-house
+    run's bound), and the carriage's stick times in the committed answer are the tables' values."""
     import pandas as pd
 
     text = (REPORTS / "index.md").read_text()
     answer = next(line for line in text.splitlines() if line.startswith("- **Spatial mechanisms"))
     runs = pd.read_csv(REPORTS / "tables" / "spatial_runs.csv")
-    bench = runs[(runs["mechanism"] == "bricard") & (runs["group"] == "benchmark")]
-    assert f"at {bench['drift_over_bound'].iloc[0]:.2g} of the library's bound" in answer
+    bench = runs[(runs["mechanism"] == "bricard") & runs["group"].isin(["benchmark", "exudyn_benchmark"])]
+    assert sorted(bench["engine"]) == ["exudyn", "inhouse"]
+    for _, r in bench.iterrows():
+        engine = {"inhouse": "in-house", "exudyn": "Exudyn"}[r["engine"]]
+        assert f"{engine} at {r['drift_over_bound']:.2g} of it ({r['setting']})" in answer
     exact = pd.read_csv(REPORTS / "tables" / "spatial_friction.csv").query("law == 'exact'")
     first, second = (float(t) for t in exact["stick_times"].iloc[0].split(";"))
     assert f"stick at {first:.7g} and {second:.7g} s" in answer

@@ -16,7 +16,7 @@ from study.report.context import ReportContext
 from study.report.sections import spatial as section
 from study.results import SimulationResult
 from study.studies import spatial_friction
-from study.studies.spatial import equal_accuracy
+from study.studies.spatial import equal_accuracy, summarize
 
 
 @pytest.mark.parametrize("name", ["heavy_top", "bricard", "spatial_slider_crank"])
@@ -161,3 +161,82 @@ def test_the_carriage_cases_take_the_reference_files_steps_and_width():
     assert {c.kwargs["eps"] for c in exudyn} == {eps}
     assert [c.kwargs["friction_eps"] for c in cases if c.kwargs.get("friction") == "regularized" and
             c.engine == "inhouse"] == [eps]
+
+
+def _benchmark_case(group: str, engine: str, **options) -> Case:
+    return Case(study="spatial", group=f"bricard:{group}", engine=engine, mechanism="bricard", variant="seed",
+                t_end=10.0, options=tuple(sorted(options.items())))
+
+
+def _energy_result(kinetic: list[float], drift: float) -> SimulationResult:
+    """Three samples whose kinetic energy is ``kinetic`` and whose total energy ends ``drift`` from its start."""
+    t, k = np.array([0.0, 5.0, 10.0]), np.array(kinetic)
+    zeros = np.zeros((3, 1))
+    return SimulationResult(t=t, q=zeros, qd=zeros, qdd=zeros, lam=zeros, phi=zeros, phidot=zeros,
+                            energies={"kinetic": k, "potential": -k + np.array([0.0, 0.0, drift])},
+                            stats={"cpu_seconds": 0.5, "steps": 3}, meta={"mechanism": "bricard"})
+
+
+INHOUSE_BENCHMARK = _benchmark_case("benchmark", "inhouse", integrator="DOP853", rtol=1e-9, method="none")
+EXUDYN_BENCHMARK = _benchmark_case("exudyn_benchmark", "exudyn", h=6.25e-5, solver="index3", configuration="tuned")
+
+
+def _benchmark_tables(exudyn_drift: float) -> dict[str, pd.DataFrame]:
+    """The in-house benchmark run (rtol 1e-9, max K 5 J, drift 1e-7 J: bound 5e-7 J) and Exudyn's (max K 3 J, its
+    bound by the in-house rtol 3e-7 J) with the drift given."""
+    loaded = {INHOUSE_BENCHMARK: _energy_result([0.0, 5.0, 2.0], 1e-7),
+              EXUDYN_BENCHMARK: _energy_result([0.0, 3.0, 1.0], exudyn_drift)}
+    return summarize(list(loaded), loaded.__getitem__)
+
+
+def test_exudyns_benchmark_run_is_held_to_the_inhouse_runs_bound_with_its_own_max_k():
+    runs = _benchmark_tables(2e-7)["spatial_runs"].set_index("group")
+    assert list(runs.index) == ["benchmark", "exudyn_benchmark"]
+    assert runs.loc["benchmark", "energy_bound_J"] == pytest.approx(tolerance("energy_drift_factor") * 1e-9 * 5.0)
+    exudyn = runs.loc["exudyn_benchmark"]
+    assert exudyn["setting"] == "index3 h=6.25e-05 tuned" and exudyn["criterion"] == "energy"
+    assert exudyn["energy_drift_J"] == pytest.approx(2e-7, rel=1e-6)
+    assert exudyn["energy_bound_J"] == pytest.approx(tolerance("energy_drift_factor") * 1e-9 * 3.0)
+    assert exudyn["drift_over_bound"] == pytest.approx(2e-7 / (tolerance("energy_drift_factor") * 3e-9), rel=1e-6)
+
+
+def test_an_exudyn_benchmark_run_without_the_inhouse_one_is_refused_by_name():
+    with pytest.raises(ValueError, match="spatial/bricard:exudyn_benchmark: .*no group 'bricard:benchmark'"):
+        summarize([EXUDYN_BENCHMARK], lambda case: _energy_result([0.0, 3.0, 1.0], 2e-7))
+
+
+@pytest.mark.parametrize("drift, verdict, keeps", [(2e-7, "within", "keeps"),
+                                                    (6e-7, "**above**", "**does not keep**")])
+def test_the_section_and_the_finding_state_bricards_energy_in_house_and_in_exudyn(tmp_path, drift, verdict, keeps):
+    """Each engine's drift against its bound, the verdict and the CPU; the finding keeps the energy only when both
+    runs do (the in-house bound 5e-7 J, Exudyn's 3e-7 J: 6e-7 J is twice it)."""
+    tables = {name: _benchmark_tables(drift)[name] for name in ("spatial_runs", "spatial_timing")}
+    write_tables(tables, tmp_path, "test")
+    ctx = ReportContext(reports_dir=tmp_path, store=None, case_lists={})
+    text = "\n".join(section.section(ctx))
+    assert ("- in-house (DOP853 rtol=1e-09 none): the energy drifts by 1e-07 J, 0.2 of its bound 5e-07 J: within "
+            "the rule, in 0.5 s of CPU.") in text
+    ratio = f"{drift / 3e-7:.2g}"
+    assert (f"- Exudyn (index3 h=6.25e-05 tuned): the energy drifts by {drift:g} J, {ratio} of its bound 3e-07 J: "
+            f"{verdict} the rule, in 0.5 s of CPU.") in text
+    assert f"| exudyn | index3 h=6.25e-05 tuned | 10 | – | {drift:g} | 3e-07 | {drift / 3e-7:.3g} | " \
+           f"{verdict.strip('*')} | 0.5 |" in text
+    runs = tables["spatial_runs"]
+    write_tables({"spatial_runs": pd.concat([runs, runs.assign(mechanism="heavy_top", group="methods")])}, tmp_path,
+                 "test")
+    assert (f"Bricard's mechanism (A04) {keeps} its energy over 10 s within the in-house run's bound, in-house at 0.2 "
+            f"of it (DOP853 rtol=1e-09 none) and Exudyn at {ratio} of it (index3 h=6.25e-05 tuned)"
+            ) in section.finding(ctx)
+
+
+def test_exudyns_bricard_benchmark_case_runs_the_reference_files_step_over_the_benchmarks_horizon():
+    """The case list's Exudyn run of A04 over [t_end] at [exudyn_energy_step] (tuned), beside the in-house run at
+    [inhouse_rtol] whose bound it is held to."""
+    from study.pipeline import CASES_DIR, load_case_list
+
+    cases = {c.group: c for c in load_case_list(CASES_DIR / "spatial.toml").cases if c.mechanism == "bricard"}
+    exudyn, inhouse = cases["bricard:exudyn_benchmark"], cases["bricard:benchmark"]
+    assert exudyn.engine == "exudyn" and exudyn.t_end == inhouse.t_end == tolerance("t_end", "spatial/bricard")
+    assert exudyn.kwargs["h"] == tolerance("exudyn_energy_step", "spatial/bricard")
+    assert (exudyn.kwargs["solver"], exudyn.kwargs["configuration"]) == ("index3", "tuned")
+    assert inhouse.kwargs["rtol"] == tolerance("inhouse_rtol", "spatial/bricard")
