@@ -9,9 +9,9 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
                                                 # the dotted name of any importable module with section(ctx))
     section_order = 40                          # ... and that section's place in the report (a number;
                                                 # study.report.FIXED_SECTIONS places the others)
-    standalone = "why"                          # optional: a list only its own command runs (the
-                                                # benchmark); load_case_lists leaves it out unless
-                                                # named, and run, reproduce and verify refuse it
+    standalone = "why"                          # optional: a list only its own command runs (the benchmark);
+                                                # load_case_lists leaves it out unless named, and run,
+                                                # reproduce and verify refuse it
 
     [[group]]
     name = "reference"                          # readable, unique within the study
@@ -25,22 +25,19 @@ A *case list* is a TOML file ``reference/cases/<study>.toml``::
     # the options (its 'label' names it), a scalar sets the option of that name. The keys 'variant',
     # 'mechanism' and 't_end' set those fields instead of an option.
     sweep = { omega = [1.0, 10.0], d = [0.5, 1.0] }
-    # optional: drop the combinations whose options contain all entries of one of these tables
-    exclude = [ { integrator = "LSODA", method = "projection" } ]
+    exclude = [ { integrator = "LSODA", method = "projection" } ]   # optional: drop the combinations these match
     # optional (engine 'inhouse'): the backend of every case of the group ('reference' or 'compiled',
-    # study.simulate's backend; a sweep entry may state its own), and for a compiled group every n-th
-    # compiled case (the first, the (n+1)-th, ...) also run on the reference path: the pairs are checked
-    # to agree (CaseList.samples, tables/
-    # backend_agreement.csv; tests/test_backend_samples.py) and are not part of the study's cases
+    # study.simulate's backend; a sweep entry may state its own), and for a compiled group every n-th compiled
+    # case (the first, the (n+1)-th, ...) also run on the reference path: the pairs are checked to agree
+    # (CaseList.samples, tables/backend_agreement.csv) and are not part of the study's cases
     backend = "compiled"
     reference_sample = 10
 
 Options are the keyword arguments of :func:`study.simulate.simulate` (engine 'inhouse'; plus
 ``initial = "printed"`` to start from the paper's printed state instead of the consistent one) or of
 :func:`study.exudyn_models.run` (engine 'exudyn', e.g. ``h``, ``solver``); either engine also takes
-``repeat = k``: the same run once more (a benchmark's k-th timing), a key of its own, the same result.
-
-A case's key (:meth:`Case.key`) is built in :mod:`study.pipeline.keys`.
+``repeat = k``: the same run once more (a benchmark's k-th timing), a key of its own, the same result. A case's key
+(:meth:`Case.key`) is built in :mod:`study.pipeline.keys`.
 """
 
 from __future__ import annotations
@@ -245,11 +242,13 @@ def _check_group(g: Mapping, where: str) -> None:
                             f"(reference/tolerances.toml): split the list or raise the bound")
 
 
-def _check_case(case: Case, where: str) -> None:
-    """A case's mechanism and variant exist and its options are arguments of its engine, of their types."""
+def _check_case(case: Case, where: str, checked: set) -> None:
+    """A case's mechanism and variant exist (once per pair: ``checked``), its options are its engine's, typed."""
     from study.mechanisms import names, variants
 
-    if is_user_file(case.mechanism):
+    if (case.mechanism, case.variant) in checked:
+        pass
+    elif is_user_file(case.mechanism):
         try:
             named_mechanism(case.mechanism, case.variant)
         except Exception as exc:   # anything a user's file raises is a problem of the case list's input
@@ -263,6 +262,7 @@ def _check_case(case: Case, where: str) -> None:
         if case.variant not in known:
             raise CaseListError(f"{where}: variant = {case.variant!r} is not a variant of {case.mechanism}; valid "
                                 f"choices: {', '.join(known)}")
+    checked.add((case.mechanism, case.variant))
     options = case.kwargs
     try:
         arguments.number("repeat", options.pop("repeat", 1), whole=True)
@@ -290,7 +290,7 @@ def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case
     backend = g.get("backend")
     if backend is not None and (engine != "inhouse" or backend not in BACKENDS):
         raise CaseListError(f"{where}: backend = {backend!r} must be one of {BACKENDS}, for engine 'inhouse' only")
-    cases = []
+    cases, checked = [], set()
     for combo in itertools.product(*sweep.values()) if sweep else [()]:
         case_fields, options, labels = dict(fields), {k: _resolve(v, where) for k, v in g.get("options", {}).items()}, []
         for k, v in zip(sweep, combo):
@@ -317,7 +317,7 @@ def _expand_group(study: str, g: Mapping, where: str, folder: Path) -> list[Case
             raise CaseListError(f"{where}: an Exudyn case needs the step 'h' [s] in its options or sweep")
         case = Case(study, g["name"], engine, case_fields["mechanism"], case_fields["variant"], float(t_end),
                     tuple(sorted(options.items())), tuple(labels), expect)
-        _check_case(case, where)
+        _check_case(case, where, checked)
         cases.append(case)
     if not cases:
         raise CaseListError(f"{where}: exclude removes every case of the group")
