@@ -53,7 +53,7 @@ def slot_mechanism(**values) -> Mechanism:
 @pytest.fixture(scope="module")
 def regularized_run():
     return simulate(slot_mechanism(), t_end=0.4, integrator="DOP853", rtol=1e-10, atol=1e-12, method="projection",
-                    friction="regularized", friction_eps=1e-3, backend="reference")
+                    friction="regularized", friction_eps=1e-3, backend="compiled")
 
 
 @pytest.fixture(scope="module")
