@@ -17,18 +17,21 @@ def slow_tier() -> set[str]:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    """Mark the tests of tests/slow_tier.toml ``slow`` before ``-m`` selects; a listed test missing from a file
-    that was collected whole is an error naming it, so the list cannot go stale silently."""
+    """Mark the tests of tests/slow_tier.toml ``slow`` before ``-k`` or ``-m`` select; a listed test missing from a
+    file given whole (or in a folder given) is an error naming it, so the list cannot go stale silently."""
     listed = slow_tier()
     collected = {item.nodeid for item in items}
     for item in items:
         if item.nodeid in listed:
             item.add_marker(pytest.mark.slow)
-    whole = {str(a).split("::")[0] for a in config.args if "::" not in str(a)}
+    root = config.rootpath
+    whole = {Path(a).resolve().relative_to(root).as_posix() for a in map(str, config.args)
+             if "::" not in a and Path(a).resolve().is_relative_to(root)}
     files = {item.nodeid.split("::")[0] for item in items}
     stale = sorted(t for t in listed - collected if t.split("::")[0] in files
-                   and any(t.startswith(w.rstrip("/")) for w in whole))
-    if stale and not config.getoption("keyword"):
+                   and any(w in (".", "") or t.startswith(w.rstrip("/") + "/") or t.split("::")[0] == w
+                           for w in whole))
+    if stale and not config.getoption("lf"):   # --lf collects a file's failed tests only
         raise pytest.UsageError(f"{SLOW_TIER.name} lists {stale[0]!r}, which is not a test (renamed or removed?)")
 
 

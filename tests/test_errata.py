@@ -247,6 +247,17 @@ def synthetic(**kw):
     return base | kw
 
 
+def test_one_misprint_is_found_without_the_table():
+    """One printed formula judged end to end (read, derived, compared on the manifold) as the table judges all
+    of them; the table's own tests (one derivation of every formula, about 10 s) are in the slow tier."""
+    from study.errata.judge import check_formula
+    from study.errata.printed import load_printed
+
+    (entry,) = [e for e in load_printed() if e["id"] == "000.a12"]
+    row = check_formula(entry)
+    assert (row["formula"], row["verdict"]) == ("000.a12", EXPECTED["000.a12"])
+
+
 def test_classifier_accepts_the_corrected_form():
     r = errata.check_formula(synthetic(kind="expression", target="mass", index=[2, 2],
                                        expr="J2 + J4 + m2*a2**2 + (m3 + m5)*l2**2"))

@@ -214,6 +214,18 @@ def test_every_treatment_runs_the_sliding_block(block_eom):
         assert np.abs(res.forces["friction_guide"] - MU_K * N_DELTA).max() <= tolerance("round_off") * MU_K * N_DELTA
 
 
+def test_the_compiled_path_slides_the_block_as_the_closed_form(block_eom):
+    """The regularized law on the compiled path (kernels generated from the same spatial system): the sliding block
+    follows the closed form within the bound the reference path's run is held to."""
+    _, eom = block_eom
+    q0, qd0 = block_start(block_eom, 0.2, -1.0)
+    res = simulate(eom, q0, qd0, t_end=1.0, output_step=0.05, integrator="DOP853", rtol=RTOL, atol=RTOL * 1e-2,
+                   friction="regularized", friction_eps=1e-4, backend="compiled")
+    x = slide(res.t, 0.2, -1.0)[0]
+    assert res.meta["backend"] == "compiled"
+    assert np.abs(res.q[:, :3] @ U - x).max() <= bound(np.abs(x).max())
+
+
 def test_regularized_converges_to_exact_at_the_creep_rate(launched):
     """After the exact block sticks at x*, tanh(v / eps) creeps down the guide at v_c = eps atanh(m G.U /
     (mu_k |N|_delta)): the distance to the exact run grows as |v_c| (T - t*), shrinking with eps."""
