@@ -214,10 +214,10 @@ def test_the_section_and_the_finding_state_bricards_energy_in_house_and_in_exudy
     write_tables(tables, tmp_path, "test")
     ctx = ReportContext(reports_dir=tmp_path, store=None, case_lists={})
     text = "\n".join(section.section(ctx))
-    assert ("- in-house (DOP853 rtol=1e-09 none): the energy drifts by 1e-07 J, 0.2 of its bound 5e-07 J: within "
+    assert ("- in-house (DOP853 rtol=1e-09 none): max abs(E − E(0)) = 1e-07 J, 0.2 of its bound 5e-07 J: within "
             "the rule, in 0.5 s of CPU.") in text
     ratio = f"{drift / 3e-7:.2g}"
-    assert (f"- Exudyn (index3 h=6.25e-05 tuned): the energy drifts by {drift:g} J, {ratio} of its bound 3e-07 J: "
+    assert (f"- Exudyn (index3 h=6.25e-05 tuned): max abs(E − E(0)) = {drift:g} J, {ratio} of its bound 3e-07 J: "
             f"{verdict} the rule, in 0.5 s of CPU.") in text
     assert f"| exudyn | index3 h=6.25e-05 tuned | 10 | – | {drift:g} | 3e-07 | {drift / 3e-7:.3g} | " \
            f"{verdict.strip('*')} | 0.5 |" in text

@@ -328,16 +328,16 @@ def loop_kernels(s: Setup) -> tuple:
 
 
 def compile_kernels(s: Setup) -> None:
-    """Compile (or load) the kernels with declared signatures that the run passes to the loop, under the compile
-    lock and before its CPU time is taken: they compile on first use (``study.kernels.cache.kernel``), which would
-    otherwise be in the run's first segment."""
+    """Compile (or load) the kernels with declared signatures that the run passes to the loop, each under its
+    compile lock and before the run's CPU time is taken: they compile on first use (``study.kernels.cache.kernel``),
+    which would otherwise be in the run's first segment."""
     phases, kinematics = loop_kernels(s)
     module = s.model.module
     kernels = [(k, signature) for k, signature in ((module.evaluate, EVALUATE), (module.indicators, INDICATORS),
                                                     (s.bias, BIAS), (phases, PHASES), (kinematics, KINEMATICS))
                if k is not None]
-    with compile_lock(" ".join(_qualified(k) for k, _ in kernels)):
-        for kernel, signature in kernels:
+    for kernel, signature in kernels:
+        with compile_lock(f"{_qualified(kernel)} {signature}"):
             kernel.get_compile_result(signature)
 
 

@@ -123,11 +123,11 @@ def bricard_energy(rows: pd.DataFrame) -> list[str]:
     lines = [f"Over the benchmark's {fmt_number(bench['t_end_s'].max())} s each run is judged by the rule of the "
              "in-house run, max abs(E − E(0)) ≤ energy_drift_factor × rtol × max K over the output samples, with "
              "the in-house run's rtol (the library's energy limit was not available to this study) and the run's own "
-             "max K; Exudyn's step is the one that keeps the rule (`reference/spatial/bricard.toml` "
-             "[exudyn_energy_step]: its energy error is second order in h and bounded, not a drift):", ""]
+             "max K; Exudyn's step is chosen for the rule (`reference/spatial/bricard.toml` [exudyn_energy_step]: "
+             "its energy error is second order in h and returns towards zero, it does not accumulate):", ""]
     for _, r in bench.iterrows():
         cpu = f", in {fmt_number(r['cpu_s'])} s of CPU" if "cpu_s" in r and pd.notna(r["cpu_s"]) else ""
-        lines += [f"- {ENGINES[r['engine']]} ({r['setting']}): the energy drifts by "
+        lines += [f"- {ENGINES[r['engine']]} ({r['setting']}): max abs(E − E(0)) = "
                   f"{fmt_number(r['energy_drift_J'])} J, {fmt_number(r['drift_over_bound'], 2)} of its bound "
                   f"{fmt_number(r['energy_bound_J'])} J: {verdict(r, bold=True)} the rule{cpu}."]
     return lines + [""]
