@@ -67,6 +67,21 @@ def test_the_section_states_sliding_modes_energy_against_its_bound(tmp_path):
     assert "sliding_mode drifts 5 × its energy bound" in section.finding(ctx)
 
 
+def test_the_finding_leaves_out_joint_friction_when_its_tables_have_no_rows(tmp_path):
+    """A case list without friction runs writes the friction tables empty: the answer omits them, no crash."""
+    runs = pd.DataFrame([
+        {"mechanism": "heavy_top", "engine": engine, "group": engine, "setting": "s", "t_end_s": 0.2,
+         "error": error, "published_distance": 1.6e-6, "rounds_to_published": True, "energy_drift_J": 1e-9,
+         "energy_bound_J": 1e-8, "drift_over_bound": 0.1, "max_abs_phi": 1e-12}
+        for engine, error in (("inhouse", 1e-9), ("exudyn", 1e-5))])
+    empty = pd.DataFrame(columns=["mechanism", "law", "stuck_joints", "stick_times"])
+    orders = pd.DataFrame(columns=["quantity", "order", "verdict"])
+    write_tables({"spatial_runs": runs, "spatial_friction": empty, "spatial_friction_orders": orders}, tmp_path,
+                 "test")
+    answer = section.finding(ReportContext(reports_dir=tmp_path, store=None, case_lists={}))
+    assert answer.startswith("the heavy top to 1e-09 in-house and 1e-05 in Exudyn") and "joint friction" not in answer
+
+
 def test_the_section_says_when_the_study_has_not_run(tmp_path):
     text = "\n".join(section.section(ReportContext(reports_dir=tmp_path, store=None, case_lists={})))
     assert "the study `spatial` has not run" in text

@@ -228,7 +228,8 @@ def equal_accuracy(ctx: ReportContext) -> list[str]:
 
 def finding(ctx: ReportContext) -> str:
     """The findings' answer: the heavy top's error in-house and in Exudyn, Bricard's energy over the benchmark's
-    10 s in-house and in Exudyn against the in-house run's bound, the carriage's stick times and Exudyn's orders with friction, and sliding mode's energy."""
+    10 s in-house and in Exudyn against the in-house run's bound, the carriage's stick times and Exudyn's orders
+    with friction (when its tables have rows), and sliding mode's energy."""
     runs = ctx.table("spatial_runs")
     if runs is None:
         return "not computed: `spatial_runs` missing"
@@ -247,7 +248,7 @@ def finding(ctx: ReportContext) -> str:
         parts += [f"Bricard's mechanism (A04) {keeps} its energy over {fmt_number(bench['t_end_s'].max())} s "
                   f"within the in-house run's bound, {shares}"]
     friction, orders = ctx.table("spatial_friction"), ctx.table("spatial_friction_orders")
-    if friction is not None and orders is not None:
+    if friction is not None and orders is not None and len(friction) and len(orders):
         exact = friction[friction["law"] == "exact"]
         sticks = "; ".join(f"{r['stuck_joints']} stick at "
                            + ";".join(fmt_number(float(t), 7) for t in str(r["stick_times"]).split(";")) + " s"
