@@ -147,3 +147,20 @@ def test_a_welded_body_stays_and_a_free_body_follows_its_loads():
     expected_p = np.stack([np.cos(theta / 2), 0 * theta, 0 * theta, np.sin(theta / 2)], axis=1)
     assert np.abs(res.q[:, 10:] - expected_p).max() <= bound * theta.max()
     assert np.abs(res.q[:, 8] - res.t ** 2 / 2).max() <= bound
+
+
+def test_the_equations_are_derived_once_per_content():
+    """Two descriptions with the same content (its declared redundancy aside) share one derivation in a process;
+    a changed one, even the same object changed after a first call, is derived anew."""
+    first, again = spatial_equations(pendulum()), spatial_equations(pendulum())
+    assert again.system is first.system and again.key == first.key
+    redundant = pendulum()
+    redundant.redundant_rows(1, "declared for the test")
+    declared = spatial_equations(redundant)
+    assert declared.system is first.system and declared.redundant_rows == 1 and first.redundant_rows == 0
+    other = pendulum(frame_axis=(0.0, 1.0, 0.0))
+    assert spatial_equations(other).key != first.key
+    moon = pendulum()
+    assert spatial_equations(moon).key == first.key
+    moon.gravity((0.0, 0.0, -1.62))
+    assert spatial_equations(moon).key not in (first.key, spatial_equations(other).key)

@@ -282,9 +282,10 @@ class SpatialDescription:
             raise SpatialDescriptionError(f"torque {name!r}: frame = {frame!r} must be one of {FRAMES}")
         self.loads.append(TorqueLoad(name, body, load_components(components, self.t, f"torque {name!r}"), frame))
 
-    def fingerprint(self) -> str:
-        """SHA-256 (16 hex) of the description's content: its bodies, joints, loads, gravity and declared redundant
-        rows, every number at full precision (``repr``) and every law as sympy prints it."""
+    def fingerprint(self, redundancy: bool = True) -> str:
+        """SHA-256 (16 hex) of the description's content: its bodies, joints, loads, gravity and (unless
+        ``redundancy`` is False: what the equations are derived from) declared redundant rows, every number at full
+        precision (``repr``) and every law as sympy prints it."""
         def plain(value):
             if isinstance(value, np.ndarray):
                 return [plain(v) for v in value.tolist()]
@@ -296,6 +297,7 @@ class SpatialDescription:
 
         parts = [("body", plain(dataclasses.asdict(b))) for b in self.bodies.values()]
         parts += [(type(e).__name__, plain(dataclasses.asdict(e))) for e in (*self.joints, *self.loads)]
-        parts += [("gravity", plain(self.gravity_vector)), ("redundant", self.redundant, self.redundancy_reason)]
+        parts += [("gravity", plain(self.gravity_vector))]
+        parts += [("redundant", self.redundant, self.redundancy_reason)] if redundancy else []
         parts += [("friction", plain(dataclasses.asdict(f))) for f in self.frictions.values()]
         return hashlib.sha256(repr((self.name, parts)).encode()).hexdigest()[:16]

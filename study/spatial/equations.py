@@ -15,15 +15,28 @@ from __future__ import annotations
 from study.model.codegen import reference_source
 from study.model.compile import GeneratedEquations, bound_forces, reference_module, system_key
 from study.spatial.derive import derive_spatial, spatial_system
-from study.spatial.description import SpatialDescription
+from study.spatial.description import SpatialDescription, spatial_only
 from study.spatial.friction import joint_pins
+
+
+#: (symbolic equations, system, its key) by the content they are derived from: derived once per process
+_DERIVED: dict[str, tuple] = {}
+
+
+def _derived(d: SpatialDescription) -> tuple:
+    """The symbolic equations of ``d``, its system and the system's key, derived on the first call for its content
+    (the declared redundancy does not enter them; a description changed since is derived anew)."""
+    content = spatial_only(d).fingerprint(redundancy=False)
+    if content not in _DERIVED:
+        s = derive_spatial(d)
+        system = spatial_system(d.name, s)
+        _DERIVED[content] = (s, system, system_key(system))
+    return _DERIVED[content]
 
 
 def spatial_equations(d: SpatialDescription) -> GeneratedEquations:
     """The EquationsOfMotion of a spatial description (a planar one is refused by name)."""
-    s = derive_spatial(d)
-    system = spatial_system(d.name, s)
-    key = system_key(system)
+    s, system, key = _derived(d)
     f = reference_module(d.name, key, lambda: reference_source(system)).bind([])
     applied_forces, forces = bound_forces(f, tuple(s.loads), f["indicators"])
     return GeneratedEquations(
