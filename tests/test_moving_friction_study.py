@@ -15,6 +15,8 @@ energy-balance check of every friction run.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import dataclasses
 import io
 import math
@@ -53,13 +55,15 @@ def slot_mechanism(**values) -> Mechanism:
 @pytest.fixture(scope="module")
 def regularized_run():
     return simulate(slot_mechanism(), t_end=0.4, integrator="DOP853", rtol=1e-10, atol=1e-12, method="projection",
-                    friction="regularized", friction_eps=1e-3, backend="compiled")
+                    friction="regularized", friction_eps=1e-3, backend="reference")
 
 
-@pytest.fixture(scope="module")
-def exact_runs():
-    cases = find(case_list().cases, group="quick_return/slot_friction:exact")
-    return {c.kwargs["backend"]: (c, run_case(c)) for c in cases}
+@lru_cache(maxsize=None)
+def exact_run(backend: str):
+    """(case, result) of the slot friction's exact run on ``backend``, as its case list states it."""
+    (case,) = [c for c in find(case_list().cases, group="quick_return/slot_friction:exact")
+               if c.kwargs["backend"] == backend]
+    return case, run_case(case)
 
 
 # --- the energy-balance check --------------------------------------------------------------------------------
@@ -169,8 +173,8 @@ def test_the_pipeline_records_the_flag_and_run_and_verify_fail_on_it(tmp_path, m
 
 
 # --- the exact law: backends, dead centres, the static limit -------------------------------------------------
-def test_backends_agree_on_the_slot_friction_exact_run(exact_runs):
-    (case, compiled), (_, reference) = exact_runs["compiled"], exact_runs["reference"]
+def test_backends_agree_on_the_slot_friction_exact_run():
+    (case, compiled), (_, reference) = exact_run("compiled"), exact_run("reference")
     assert np.array_equal(compiled.t, reference.t)
     factor = 2 * tolerance("adaptive_global_error_factor") * case.kwargs["rtol"]   # each within its global error
     for field in ("q", "qd"):
@@ -183,17 +187,17 @@ def test_backends_agree_on_the_slot_friction_exact_run(exact_runs):
         assert abs(x["t"] - y["t"]) <= tolerance("event_time_agreement_adaptive")
 
 
-def test_the_slot_reverses_at_the_kinematic_dead_centres_and_is_never_held(exact_runs):
+def test_the_slot_reverses_at_the_kinematic_dead_centres_and_is_never_held():
     """Each stop of the block's sliding lies where the hand kinematics put dr/dq1 = 0 (q1 = pi/2 + k pi), and the
     force needed to hold it there exceeds the static limit: the sliding reverses."""
-    case, r = exact_runs["compiled"]
+    case, r = exact_run("reference")
     stops = mf.transitions(r)
     assert len(stops) == 2
     for k, x in enumerate(stops):
         assert x["from"] != "stick" and x["to"] != "stick"
         assert not abs(x["f_required"]) <= x["limit"]   # inf, or a limit exceeded: not holdable
         upto = simulate(slot_mechanism(), t_end=x["t"], integrator="DOP853", rtol=case.kwargs["rtol"],
-                        atol=case.kwargs["atol"], method="projection", friction="exact", backend="compiled",
+                        atol=case.kwargs["atol"], method="projection", friction="exact", backend="reference",
                         output_step=x["t"])
         q1 = upto.q[-1, 0]
         bound = tolerance("adaptive_global_error_factor") * case.kwargs["rtol"] * abs(q1)
