@@ -19,16 +19,15 @@ revolute joint with friction), one function each, and whether a model needs its 
 
 from __future__ import annotations
 
-import math
 
 import sympy as sp
 
 from study.exudyn_models.assembly import Assembly
 from study.exudyn_models.building import OVT
-from study.exudyn_models.guards import GuideFriction, PinFrictionTorque, ReactionGuard
+from study.exudyn_models.guards import GuideFriction, PinFrictionTorque, ReactionGuard, reaction_norm
 from study.model.joints import GROUND, Description, Prismatic, Revolute
 
-_FORCE_LOCAL, _FORCE = OVT.ForceLocal, OVT.Force   # the reactions the friction laws read, looked up once
+_FORCE_LOCAL = OVT.ForceLocal   # the reaction the guide's friction reads, looked up once
 
 #: How a friction law that reads a joint reaction (a guide's normal force, a pin's |R|) is evaluated.
 REACTION_LAW_EVALUATION = ("Python user function (reads the joint reaction through mbs.GetObjectOutput; no Exudyn "
@@ -94,19 +93,11 @@ def _normal_force(obj: int, normal: tuple[float, float]):
     return read
 
 
-def _reaction_norm(obj: int):
-    """The reader of a revolute joint's reaction magnitude |R| = hypot(Rx, Ry) (``obj``'s global 'Force')."""
-    def read(mbs) -> float:
-        f = mbs.GetObjectOutput(obj, _FORCE).tolist()
-        return math.hypot(f[0], f[1])
-    return read
-
-
 def add_pin_friction(a: Assembly, j: Revolute, delta: float) -> None:
     """The regularized friction torque of a pin on its bodies (its opposite on the second; nothing on ground)."""
     model, built = a.model, a.built
     obj = model.joints[j.name][0]
-    guard = ReactionGuard(_reaction_norm(obj))
+    guard = ReactionGuard(reaction_norm(obj))
     sides = (j.a[0], j.b[0])
     fric = PinFrictionTorque(model, tuple(None if b == GROUND else model.node(b) for b in sides), guard,
                        coefficient=a.val(j.friction.mu_kinetic) * a.val(j.radius),

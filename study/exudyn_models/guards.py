@@ -27,6 +27,22 @@ _POSITION, _VELOCITY, _COORDINATES, _ANGULAR_VELOCITY = OVT.Position, OVT.Veloci
 LEVEL, NORM, SLIP = friction_level.py_func, pin_norm.py_func, SIGN_FUNCTIONS["tanh"]
 
 
+def joint_friction(coefficient: float, reaction: float, delta: float, resistance: float, rate: float,
+                   eps: float) -> float:
+    """The regularized friction of a joint whose reaction scales it (a pin's torque, a spatial joint's torque or
+    force): ``-(coefficient |R|_delta + resistance) tanh(rate / eps)``, the laws above."""
+    return -LEVEL(coefficient, NORM(reaction, 0.0, delta), resistance) * SLIP(rate, eps)
+
+
+def reaction_norm(obj: int, output=OVT.Force):
+    """The reader of a joint's transverse reaction magnitude |R| = hypot(R_x, R_y) in ``obj``'s ``output`` (the
+    planar revolute's global 'Force'; a spatial joint's 'ForceLocal', its joint frame)."""
+    def read(mbs) -> float:
+        f = mbs.GetObjectOutput(obj, output).tolist()
+        return math.hypot(f[0], f[1])
+    return read
+
+
 class ReactionGuard:
     """'Hybrid' reading of a joint reaction inside a load user function.
 
@@ -187,7 +203,7 @@ class PinFrictionTorque(RecordedFriction):
         omega = ((0.0 if a is None else mbs.GetNodeOutput(a, _ANGULAR_VELOCITY).tolist()[2])
                  - (0.0 if b is None else mbs.GetNodeOutput(b, _ANGULAR_VELOCITY).tolist()[2]))
         r = self.guard.value(mbs) if record else self.guard.peek(mbs)
-        tau = -LEVEL(self.coefficient, NORM(r, 0.0, self.delta), self.resistance) * SLIP(omega, self.eps)
+        tau = joint_friction(self.coefficient, r, self.delta, self.resistance, omega, self.eps)
         if record:
             self.last = (r, omega, tau)
         return tau

@@ -53,7 +53,6 @@ point P has p . Q_p = 2 (P - r) . F (A(p) is homogeneous quadratic in p), a torq
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerBodyPosition, MarkerBodyRigid
@@ -61,7 +60,7 @@ from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerBodyPo
 import study.exudyn_models.settings as settings
 import study.exudyn_models.solve as solve
 from study.exudyn_models.building import OVT
-from study.exudyn_models.guards import LEVEL, NORM, SLIP, ReactionGuard, RecordedFriction
+from study.exudyn_models.guards import ReactionGuard, RecordedFriction, joint_friction, reaction_norm
 from study.spatial.elements import GROUND, JointFriction, Prismatic
 from study.spatial.joints import joint_frames
 
@@ -119,7 +118,7 @@ class SpatialJointFriction(RecordedFriction):
 
     def __init__(self, model, joint: int, prismatic: bool, axis_node: int | None, axis: Array, coefficient: float,
                  resistance: float, eps: float, delta: float):
-        guard = ReactionGuard(lambda mbs: math.hypot(*mbs.GetObjectOutput(joint, OVT.ForceLocal)[:2]))
+        guard = ReactionGuard(reaction_norm(joint, OVT.ForceLocal))
         super().__init__(model, guard, 6)
         self.joint, self.axis_node, self.axis = joint, axis_node, tuple(float(c) for c in axis)
         self.rate = OVT.VelocityLocal if prismatic else OVT.AngularVelocityLocal
@@ -137,7 +136,7 @@ class SpatialJointFriction(RecordedFriction):
         """(tau or f on body a, u) at the current state; ``record``: count the guard's call and keep ``last``."""
         rate = mbs.GetObjectOutput(self.joint, self.rate)[2]
         reaction = self.guard.value(mbs) if record else self.guard.peek(mbs)
-        value = -LEVEL(self.coefficient, NORM(reaction, 0.0, self.delta), self.resistance) * SLIP(rate, self.eps)
+        value = joint_friction(self.coefficient, reaction, self.delta, self.resistance, rate, self.eps)
         u = self.global_axis(mbs)
         if record:
             self.last = (reaction, rate, value, *u)
