@@ -13,15 +13,15 @@ from __future__ import annotations
 
 import pandas as pd
 
-from study.report.context import ReportContext
 from study.reference_data import tolerance
+from study.report.context import ReportContext
 from study.report.render import fmt_number, md_table
+from study.report.sections.benchmark_overview import ENGINE
 from study.studies.spatial_cases import BENCHMARK_ROLES
 
 TITLE = "Spatial mechanisms"
 LABELS = {"heavy_top": "heavy top", "bricard": "Bricard's mechanism (A04)",
           "spatial_slider_crank": "Haug's spatial slider-crank"}
-ENGINES = {"inhouse": "in-house", "exudyn": "Exudyn"}
 
 
 def _runs(ctx: ReportContext) -> pd.DataFrame | None:
@@ -127,7 +127,7 @@ def bricard_energy(rows: pd.DataFrame) -> list[str]:
              "its energy error is second order in h and returns towards zero, it does not accumulate):", ""]
     for _, r in bench.iterrows():
         cpu = f", in {fmt_number(r['cpu_s'])} s of CPU" if "cpu_s" in r and pd.notna(r["cpu_s"]) else ""
-        lines += [f"- {ENGINES[r['engine']]} ({r['setting']}): max abs(E − E(0)) = "
+        lines += [f"- {ENGINE[r['engine']]} ({r['setting']}): max abs(E − E(0)) = "
                   f"{fmt_number(r['energy_drift_J'])} J, {fmt_number(r['drift_over_bound'], 2)} of its bound "
                   f"{fmt_number(r['energy_bound_J'])} J: {verdict(r, bold=True)} the rule{cpu}."]
     return lines + [""]
@@ -242,7 +242,7 @@ def finding(ctx: ReportContext) -> str:
     parts = [f"the heavy top to {fmt_number(best['inhouse'])} in-house and {fmt_number(best['exudyn'])} in Exudyn "
              f"against the independent model"]
     if len(bench):
-        shares = " and ".join(f"{ENGINES[r['engine']]} at {fmt_number(r['drift_over_bound'], 2)} of it "
+        shares = " and ".join(f"{ENGINE[r['engine']]} at {fmt_number(r['drift_over_bound'], 2)} of it "
                               f"({r['setting']})" for _, r in bench.iterrows())
         keeps = "keeps" if bool((bench["drift_over_bound"] <= 1.0).all()) else "**does not keep**"
         parts += [f"Bricard's mechanism (A04) {keeps} its energy over {fmt_number(bench['t_end_s'].max())} s "
