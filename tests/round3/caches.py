@@ -127,10 +127,10 @@ def _valid_pickle_wrong_content(own):
     return path
 
 
-# Every damage fails inside the same ``load_overload`` and heals by the same ``_discard``: make test keeps one in a
-# real process; the other two run in the slow suite (make verify), and all three damages heal in this process in
-# tests/test_cache_folder.py (test_a_damaged_entry_is_discarded_and_recompiled).
-add(G, "kernel_nbc_cut_in_half_is_recompiled", _damaged_kernel(_cut_in_half), OK)
+# Every damage fails inside the same ``load_overload`` and heals by the same ``_discard``: in a real process (each
+# recompiles the loop) the three run in the slow suite (make verify); make test heals all three damages in its own
+# process in tests/test_cache_folder.py (test_a_damaged_entry_is_discarded_and_recompiled).
+add(G, "kernel_nbc_cut_in_half_is_recompiled", _damaged_kernel(_cut_in_half), OK, slow=True)
 add(G, "kernel_nbi_overwritten_is_recompiled", _damaged_kernel(_overwrite_index), OK, slow=True)
 add(G, "kernel_nbc_valid_pickle_wrong_content", _damaged_kernel(_valid_pickle_wrong_content), OK, slow=True)
 
@@ -176,8 +176,8 @@ def _clean_run_writes_nothing_in_the_package(tmp):
     assert out.returncode == 0, out.stderr[-300:]
 
 
-# Every child run of this group asserts the same (_child), the three of kernel_nbc_cut_in_half_is_recompiled in
-# make test among them: this try runs in the slow suite.
+# Every child run of this group asserts the same (_child), the three of each damage try among them (slow suite):
+# this try runs in the slow suite too.
 add(G, "compiled_run_writes_nothing_in_the_package", _clean_run_writes_nothing_in_the_package, OK, slow=True)
 
 
