@@ -19,7 +19,6 @@ revolute joint with friction), one function each, and whether a model needs its 
 
 from __future__ import annotations
 
-
 import sympy as sp
 
 from study.exudyn_models.assembly import Assembly

@@ -53,7 +53,6 @@ point P has p . Q_p = 2 (P - r) . F (A(p) is homogeneous quadratic in p), a torq
 
 from __future__ import annotations
 
-
 import numpy as np
 from exudyn.itemInterface import LoadForceVector, LoadTorqueVector, MarkerBodyPosition, MarkerBodyRigid
 
@@ -68,7 +67,7 @@ Array = np.ndarray
 
 #: the Exudyn run's friction options a description without friction takes: the regularized law (the Exudyn
 #: specification's default) and none are the same frictionless model
-FRICTIONLESS = ("regularized", "none")
+FRICTIONLESS = settings.FRICTION_MODES
 FRICTION_LAW = ("regularized Coulomb friction in the joints (study.exudyn_models.spatial_friction): revolute "
                 "-(mu_k r |R_t|_delta + T0) tanh(omega_rel/eps) about the axis, prismatic -(mu_k |N|_delta + F0) "
                 "tanh(v_rel/eps) along it, R_t and N the joint's ForceLocal across the axis")

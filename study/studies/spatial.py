@@ -20,6 +20,7 @@ criterion, its energy, and its CPU, for "CPU against Exudyn at equal accuracy".
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Callable, Sequence
 
@@ -105,6 +106,7 @@ def equal_accuracy(runs: pd.DataFrame) -> pd.DataFrame:
 
 def summarize(cases: Sequence[Case], load: Callable[[Case], SimulationResult]) -> dict[str, pd.DataFrame]:
     """The tables of the module docstring."""
+    load = functools.cache(load)   # the references and the friction tables read runs the loop reads too
     references = {c.mechanism: load(c) for c in cases if role(c) == REFERENCE_ROLE}
     rtols = benchmark_rtols(cases)
     rows, timing = [], []
